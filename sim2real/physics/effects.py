@@ -1,0 +1,194 @@
+"""Unmodeled effects: physics a nominal model leaves out, as per-env parameters in ``z``.
+
+Each effect is off at its default value and then *exactly* neutral (every branch is a
+``jnp.where(enabled, effected, raw)``, so an off effect returns the raw array bit for bit).
+
+Pipeline of one control step (``Env.step``)::
+
+    action -> action_delay -> motor_lag -> backlash -> [MuJoCo: saturation via forcerange]
+    each physics substep: Coulomb/Stribeck friction as a velocity-dependent damping term
+    measured qpos = qpos + sensor_offset + sensor_noise * N(0, 1)
+
+Coulomb friction is written as ``f(v) = c(v) * v`` with ``c(v) = level(v) * tanh(v/eps) / v >= 0``
+and added to ``dof_damping`` for the substep: MuJoCo's Euler integrator treats damping
+implicitly, so the stiff region near ``v = 0`` stays stable for any ``eps`` and the joint sticks
+instead of chattering. This needs no frictionloss structure in the compiled model (the MJX
+``put_model`` pitfall) and stays differentiable. Envs therefore keep ``eulerdamp`` enabled.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+from flax import struct
+
+from sim2real.physics.catalog import is_servo
+from sim2real.physics.params import ParamSpec
+
+
+@struct.dataclass
+class EffectState:
+    """Per-env effect memory.
+
+    Attributes:
+      action_buf: ``[D + 2, nu]`` past commands, newest first (for the action delay).
+      lag: ``[nu]`` output of the first-order motor lag.
+      gap: ``[nu]`` motor-side offset inside the backlash dead band.
+      gap_vel: ``[nu]`` its rate.
+    """
+
+    action_buf: jax.Array
+    lag: jax.Array
+    gap: jax.Array
+    gap_vel: jax.Array
+
+
+def _rows(spec: ParamSpec, kind: str, ids) -> np.ndarray:
+    """Index into z of ``kind`` for each id in ``ids`` (or -1 when the env has no such entry)."""
+    by_id = {p.index: i for i, p in spec.of_kind(kind)}
+    return np.array([by_id.get(int(k), -1) for k in ids], np.int32)
+
+
+@dataclasses.dataclass(frozen=True)
+class EffectsConfig:
+    """Static effect settings.
+
+    Attributes:
+      max_delay: longest action delay in control steps (size of the delay buffer).
+      coulomb_eps: velocity scale of the tanh friction model (joint units / s).
+      backlash_inertia: reflected motor inertia crossing the dead band; 0 = use dof armature
+        (or 1e-2 where that is zero).
+    """
+
+    max_delay: int = 4
+    coulomb_eps: float = 1e-3
+    backlash_inertia: float = 0.0
+
+
+class Effects:
+    """Effect application for one model and spec (static; methods are pure)."""
+
+    def __init__(self, m: mujoco.MjModel, spec: ParamSpec, cfg: EffectsConfig):
+        self.cfg, self.spec = cfg, spec
+        self.nu = m.nu
+        act_joint = np.array([m.actuator_trnid[a, 0] for a in range(m.nu)], np.int32)
+        self.act_qpos = np.array([m.jnt_qposadr[j] for j in act_joint], np.int32)
+        self.act_dof = np.array([m.jnt_dofadr[j] for j in act_joint], np.int32)
+        self.act_servo = np.array([is_servo(m, a) for a in range(m.nu)], bool)
+        self.act_gain = np.array([m.actuator_gear[a, 0] * m.actuator_gainprm[a, 0] for a in range(m.nu)])
+        arm = np.array([m.dof_armature[d] for d in self.act_dof])
+        self.act_inertia = (np.full(m.nu, cfg.backlash_inertia) if cfg.backlash_inertia > 0
+                            else np.where(arm > 0, arm, 1e-2))
+        acts = np.arange(m.nu)
+        self.r_backlash = _rows(spec, "backlash", acts)
+        self.r_lag = _rows(spec, "motor_lag", acts)
+        self.r_gain = _rows(spec, "actuator_gain", acts)
+        # joint-level friction entries
+        fj = [p.index for _, p in spec.of_kind("coulomb")]
+        self.fric_joints = np.array(fj, np.int32)
+        self.fric_dof = np.array([m.jnt_dofadr[j] for j in fj], np.int32)
+        self.r_fc = _rows(spec, "coulomb", fj)
+        self.r_fa = _rows(spec, "coulomb_asym", fj)
+        self.r_fs = _rows(spec, "stribeck", fj)
+        self.r_vs = _rows(spec, "stribeck_vel", fj)
+        sj = [p.index for _, p in spec.of_kind("sensor_offset")]
+        self.sense_qpos = np.array([m.jnt_qposadr[j] for j in sj], np.int32)
+        self.r_off = _rows(spec, "sensor_offset", sj)
+        self.r_noise = _rows(spec, "sensor_noise", sj)
+        self.r_delay = spec.index("action_delay") if "action_delay" in spec else -1
+
+    # ------------------------------------------------------------------------------
+    def init_state(self) -> EffectState:
+        nu = self.nu
+        return EffectState(
+            action_buf=jnp.zeros((self.cfg.max_delay + 2, nu)),
+            lag=jnp.zeros(nu),
+            gap=jnp.zeros(nu),
+            gap_vel=jnp.zeros(nu),
+        )
+
+    @staticmethod
+    def _take(z, rows, default=0.0):
+        rows = np.asarray(rows)
+        if rows.size == 0:
+            return jnp.zeros((0,))
+        vals = z[np.maximum(rows, 0)]
+        return jnp.where(rows >= 0, vals, default)
+
+    def actuate(self, z, es: EffectState, ctrl, qpos, dt: float):
+        """Command pipeline: delay -> motor lag -> backlash.
+
+        Args:
+          z: ``[P]`` physics vector (clipped).
+          es: effect state.
+          ctrl: ``[nu]`` command for this control step (already in ctrl units).
+          qpos: ``[nq]`` current joint positions (true, for servo backlash).
+          dt: control period in seconds.
+        Returns:
+          ``(ctrl_applied [nu], new effect state)``.
+        """
+        buf = jnp.concatenate([ctrl[None], es.action_buf[:-1]], axis=0)
+        u = ctrl
+        if self.r_delay >= 0:
+            d = z[self.r_delay]
+            k = jnp.floor(d).astype(jnp.int32)
+            frac = d - k
+            delayed = (1.0 - frac) * buf[k] + frac * buf[k + 1]
+            u = jnp.where(d > 0, delayed, ctrl)
+        # first-order motor lag, exact discretisation
+        tau = self._take(z, self.r_lag)
+        alpha = 1.0 - jnp.exp(-dt / jnp.maximum(tau, 1e-9))
+        lagged = es.lag + alpha * (u - es.lag)
+        u = jnp.where(tau > 0, lagged, u)
+        lag_state = u
+        # backlash: dead band between actuator and joint
+        b = self._take(z, self.r_backlash)
+        gap, gap_vel = es.gap, es.gap_vel
+        if self.nu:
+            h = 0.5 * b
+            q = qpos[self.act_qpos]
+            # servo: the spring between target and joint acts only outside the band
+            err = u - q
+            servo_u = q + jnp.sign(err) * jnp.maximum(jnp.abs(err) - h, 0.0)
+            # motor: torque reaches the joint only once the motor side has crossed the band
+            gain = jnp.where(self.r_gain >= 0, self._take(z, self.r_gain), self.act_gain)
+            torque = gain * u
+            gv = gap_vel + dt * torque / self.act_inertia
+            g = gap + dt * gv
+            hit_hi, hit_lo = g >= h, g <= -h
+            engaged = (hit_hi & (torque > 0)) | (hit_lo & (torque < 0))
+            motor_u = jnp.where(engaged, u, 0.0)
+            on = b > 0
+            gap = jnp.where(on & ~self.act_servo, jnp.clip(g, -h, h), gap)
+            gap_vel = jnp.where(on & ~self.act_servo, jnp.where(hit_hi | hit_lo, 0.0, gv), gap_vel)
+            u = jnp.where(on, jnp.where(self.act_servo, servo_u, motor_u), u)
+        return u, EffectState(action_buf=buf, lag=lag_state, gap=gap, gap_vel=gap_vel)
+
+    def friction_damping(self, z, qvel) -> tuple[np.ndarray, jax.Array]:
+        """Coulomb/Stribeck friction as velocity-dependent damping for one substep.
+
+        Returns ``(dof indices [J], damping to add [J])``; zero where friction is off.
+        """
+        if self.fric_dof.size == 0:
+            return self.fric_dof, jnp.zeros((0,))
+        v = qvel[self.fric_dof]
+        fc, asym = self._take(z, self.r_fc), self._take(z, self.r_fa)
+        fs, vs = self._take(z, self.r_fs), self._take(z, self.r_vs, 0.1)
+        level = fc * (1.0 + asym * jnp.sign(v)) + fs * jnp.exp(-jnp.square(v / vs))
+        eps = self.cfg.coulomb_eps
+        safe_v = jnp.where(jnp.abs(v) > 1e-12, v, 1.0)
+        c = jnp.where(jnp.abs(v) > 1e-12, level * jnp.tanh(v / eps) / safe_v, level / eps)
+        return self.fric_dof, jnp.where(level > 0, c, 0.0)
+
+    def sense(self, z, qpos, key):
+        """Measured joint positions ``[nq]``: offsets and white noise on effect joints."""
+        if self.sense_qpos.size == 0:
+            return qpos
+        off = self._take(z, self.r_off)
+        std = self._take(z, self.r_noise)
+        noise = std * jax.random.normal(key, off.shape)
+        meas = qpos[self.sense_qpos] + off + noise
+        return qpos.at[self.sense_qpos].set(jnp.where((off != 0) | (std > 0), meas, qpos[self.sense_qpos]))

@@ -1,0 +1,52 @@
+"""Shared fixtures: envs and one compiled batched rollout per env (JAX compiles are slow on CPU)."""
+from __future__ import annotations
+
+import functools
+
+
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import sim2real  # noqa: E402,F401
+from sim2real.envs import make  # noqa: E402
+
+
+@functools.lru_cache(maxsize=None)
+def env_for(name: str):
+    return make(name)
+
+
+@functools.lru_cache(maxsize=None)
+def batched_rollout(name: str):
+    """jit(vmap over z) of a T-step rollout with fixed actions, returning per-step arrays."""
+    env = env_for(name)
+
+    def one(z, actions, key):
+        s = env.reset(key, z)
+
+        def f(s, a):
+            s = env.step(s, a, z)
+            out = dict(qpos=s.data.qpos, qvel=s.data.qvel, obs=s.obs, reward=s.reward,
+                       terminated=s.terminated, truncated=s.truncated,
+                       diverged=s.metrics["diverged"], force=s.data.actuator_force)
+            return s, out
+
+        return jax.lax.scan(f, s, actions)[1]
+
+    return jax.jit(jax.vmap(one, in_axes=(0, None, None)))
+
+
+def smooth_actions(env, T, seed=0, scale=0.5):
+    """Smooth random actions ``[T, A]`` inside the ctrl range."""
+    rng = np.random.default_rng(seed)
+    a = np.clip(np.cumsum(rng.normal(0, scale, (T, env.action_size)), 0), -1, 1)
+    lo = np.where(np.isfinite(env.ctrl_low), env.ctrl_low, -1.0)
+    hi = np.where(np.isfinite(env.ctrl_high), env.ctrl_high, 1.0)
+    return jnp.asarray(lo + (a + 1) / 2 * (hi - lo), jnp.float32)
+
+
+@pytest.fixture
+def key():
+    return jax.random.PRNGKey(0)
