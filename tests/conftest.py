@@ -38,6 +38,30 @@ def batched_rollout(name: str):
     return jax.jit(jax.vmap(one, in_axes=(0, None, None)))
 
 
+T_ROLLOUT = 40
+
+
+def batch_size(name: str) -> int:
+    """One batch size per env (default, modified, each parameter at both bounds, all-low, all-high)."""
+    return 4 + 2 * len(env_for(name).spec)
+
+
+def run_rows(name: str, zs, key=None):
+    """Run rows ``zs [N, P]`` for ``T_ROLLOUT`` steps of the env's standard actions.
+
+    Pads to the env's fixed batch size so every test of an env reuses one compiled rollout.
+    Returns a dict of numpy arrays ``[N, T, ...]``.
+    """
+    env = env_for(name)
+    zs = np.asarray(zs, np.float32)
+    n, full = len(zs), batch_size(name)
+    assert n <= full
+    padded = np.concatenate([zs, np.tile(env.default_z(), (full - n, 1))])
+    key = jax.random.PRNGKey(0) if key is None else key
+    out = batched_rollout(name)(jnp.asarray(padded), smooth_actions(env, T_ROLLOUT), key)
+    return {k: np.asarray(v)[:n] for k, v in out.items()}
+
+
 def smooth_actions(env, T, seed=0, scale=0.5):
     """Smooth random actions ``[T, A]`` inside the ctrl range."""
     rng = np.random.default_rng(seed)

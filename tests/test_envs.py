@@ -7,13 +7,13 @@ import mujoco
 import numpy as np
 import pytest
 
-from conftest import batched_rollout, env_for, smooth_actions
+from conftest import T_ROLLOUT, env_for, run_rows, smooth_actions
 from sim2real.envs.autoreset import step_autoreset
 from sim2real.physics.model_apply import to_mjmodel
 
 ENVS = ["pendulum", "cartpole", "arm2", "prismatic", "hopper", "halfcheetah"]
 CONTACT = {"hopper", "halfcheetah"}
-T = 40
+T = T_ROLLOUT
 
 
 def modified_z(env):
@@ -49,9 +49,7 @@ def results(name):
     env = env_for(name)
     zs = np.concatenate([env.default_z()[None], modified_z(env)[None], corners(env)])
     key = jax.random.PRNGKey(0)
-    acts = smooth_actions(env, T)
-    out = jax.tree_util.tree_map(np.asarray, batched_rollout(name)(jnp.asarray(zs), acts, key))
-    return zs, acts, key, out
+    return zs, smooth_actions(env, T), key, run_rows(name, zs, key)
 
 
 def native_rollout(env, z, key, actions):

@@ -1,0 +1,183 @@
+"""Effects library: exactly neutral when off, and each one changes the dynamics the way it should."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from mujoco import mjx
+
+from conftest import T_ROLLOUT, env_for, run_rows, smooth_actions
+from sim2real.physics.catalog import ACTUATOR_EFFECTS, BODY_EFFECTS, JOINT_EFFECTS
+
+KEY = jax.random.PRNGKey(0)
+
+
+def plain_mjx(env, z, actions):
+    """Nominal physics with no effect code at all: clip the action, mjx.step frame_skip times."""
+    m = env.physics.mx
+    s0 = env.reset(KEY, jnp.asarray(z))
+
+    def f(d, a):
+        d = d.replace(ctrl=jnp.clip(a, env.ctrl_low, env.ctrl_high))
+        d = jax.lax.fori_loop(0, env.config.frame_skip, lambda _, d: mjx.step(m, d), d)
+        return d, d.qpos
+
+    return np.asarray(jax.jit(lambda d, a: jax.lax.scan(f, d, a)[1])(s0.data, actions))
+
+
+@pytest.mark.parametrize("name", ["pendulum", "arm2", "prismatic"])
+def test_effects_off_is_bitwise_neutral(name):
+    """At default z every effect function hands back its input bit for bit, and apply() the model."""
+    env = env_for(name)
+    z = jnp.asarray(env.default_z())
+    fx = env.effects
+    rng = np.random.default_rng(0)
+    ctrl = jnp.asarray(rng.normal(size=env.action_size), jnp.float32)
+    qpos = jnp.asarray(rng.normal(size=env.mj_model.nq), jnp.float32)
+    qvel = jnp.asarray(rng.normal(size=env.mj_model.nv), jnp.float32)
+    es = fx.init_state()
+    for _ in range(3):  # with a filled delay buffer too
+        u, es = fx.actuate(z, es, ctrl, qpos, env.dt)
+        np.testing.assert_array_equal(np.asarray(u), np.asarray(ctrl))
+    _, extra = fx.friction_damping(z, qvel)
+    assert np.all(np.asarray(extra) == 0.0)
+    np.testing.assert_array_equal(np.asarray(fx.sense(z, qpos, KEY)), np.asarray(qpos))
+    m = env.physics.apply(z)
+    for leaf_new, leaf_old in zip(jax.tree_util.tree_leaves(m), jax.tree_util.tree_leaves(env.physics.mx)):
+        np.testing.assert_array_equal(np.asarray(leaf_new), np.asarray(leaf_old))
+
+
+@pytest.mark.parametrize("name", ["pendulum", "arm2", "prismatic"])
+def test_effects_off_matches_plain_mjx(name):
+    """Whole trajectory vs a loop with no effect code (equal up to XLA's batch-vs-single rounding)."""
+    env = env_for(name)
+    out = run_rows(name, env.default_z()[None])
+    ref = plain_mjx(env, env.default_z(), smooth_actions(env, T_ROLLOUT))
+    np.testing.assert_allclose(out["qpos"][0], ref, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", ["pendulum", "cartpole", "arm2", "prismatic", "hopper", "halfcheetah"])
+def test_every_env_exposes_every_effect(name):
+    env = env_for(name)
+    kinds = {p.kind for p in env.spec.params}
+    assert set(JOINT_EFFECTS) | set(ACTUATOR_EFFECTS) | set(BODY_EFFECTS) <= kinds
+    assert {"action_delay", "obs_noise", "gravity"} <= kinds
+
+
+# --- pendulum: one torque motor with gear 1, so actuator_force is the applied command ------------
+@pytest.fixture(scope="module")
+def pend():
+    env = env_for("pendulum")
+    rows = {
+        "nominal": {},
+        "coulomb": {"coulomb:hinge": 3.0},
+        "coulomb_pos": {"coulomb:hinge": 1.0, "coulomb_asym:hinge": 0.9},
+        "coulomb_neg": {"coulomb:hinge": 1.0, "coulomb_asym:hinge": -0.9},
+        "stribeck": {"coulomb:hinge": 1.5, "stribeck:hinge": 1.5, "stribeck_vel:hinge": 0.5},
+        "viscous": {"viscous:hinge": 1.0},
+        "stiffness": {"stiffness:hinge": 5.0},
+        "backlash": {"backlash:motor": 0.3},
+        "saturation": {"saturation:motor": 0.5},
+        "motor_lag": {"motor_lag:motor": 0.2},
+        "payload": {"payload:pole": 0.5},
+        "delay1": {"action_delay": 1.0},
+        "delay_half": {"action_delay": 0.5},
+        "sensor_offset": {"sensor_offset:hinge": 0.3},
+        "sensor_noise": {"sensor_noise:hinge": 0.05},
+        "obs_noise": {"obs_noise": 0.1},
+    }
+    zs = np.stack([env.z_of(**v) for v in rows.values()])
+    out = run_rows("pendulum", zs)
+    res = {k: {f: out[f][i] for f in out} for i, k in enumerate(rows)}
+    ctrl = np.clip(np.asarray(smooth_actions(env, T_ROLLOUT))[:, 0], -2, 2)
+    return res, ctrl, env
+
+
+def path_length(r):
+    return np.abs(np.diff(r["qpos"][:, 0])).sum()
+
+
+@pytest.mark.parametrize("kind", ["coulomb", "coulomb_pos", "stribeck", "viscous", "stiffness", "backlash",
+                                  "saturation", "motor_lag", "payload", "delay1", "delay_half"])
+def test_each_effect_changes_the_dynamics(pend, kind):
+    res, _, _ = pend
+    assert np.abs(res[kind]["qpos"] - res["nominal"]["qpos"]).max() > 1e-3
+
+
+def test_dissipative_effects_reduce_motion(pend):
+    res, _, _ = pend
+    for kind in ("coulomb", "stribeck", "viscous"):
+        assert path_length(res[kind]) < 0.9 * path_length(res["nominal"]), kind
+
+
+def test_coulomb_asymmetry_acts_by_direction(pend):
+    res, _, _ = pend
+    a, b = res["coulomb_pos"]["qpos"], res["coulomb_neg"]["qpos"]
+    assert np.abs(a - b).max() > 1e-2
+
+
+def test_saturation_clamps_the_force(pend):
+    res, ctrl, _ = pend
+    assert np.abs(res["nominal"]["force"]).max() > 1.0
+    assert np.abs(res["saturation"]["force"]).max() <= 0.5 + 1e-6
+
+
+def test_delay_is_exact_whole_and_fractional(pend):
+    res, ctrl, _ = pend
+    prev = np.concatenate([[0.0], ctrl[:-1]])
+    np.testing.assert_allclose(res["delay1"]["force"][:, 0], prev, atol=1e-6)
+    np.testing.assert_allclose(res["delay_half"]["force"][:, 0], 0.5 * ctrl + 0.5 * prev, atol=1e-6)
+
+
+def test_motor_lag_is_first_order_filter(pend):
+    res, ctrl, env = pend
+    alpha = 1 - np.exp(-env.dt / 0.2)
+    u, want = 0.0, []
+    for c in ctrl:
+        u = u + alpha * (c - u)
+        want.append(u)
+    np.testing.assert_allclose(res["motor_lag"]["force"][:, 0], want, atol=1e-5)
+
+
+def test_backlash_withholds_torque_until_the_band_is_crossed(pend):
+    res, ctrl, _ = pend
+    assert res["nominal"]["force"][0, 0] != 0.0
+    assert res["backlash"]["force"][0, 0] == 0.0           # first step: motor still inside the band
+    assert (res["backlash"]["force"][:, 0] != 0).any()     # later the band is crossed
+
+
+def test_sensor_effects_touch_measurements_not_physics(pend):
+    res, _, _ = pend
+    nominal = res["nominal"]
+    for kind in ("sensor_offset", "sensor_noise", "obs_noise"):
+        np.testing.assert_array_equal(res[kind]["qpos"], nominal["qpos"])
+        assert np.abs(res[kind]["obs"] - nominal["obs"]).max() > 1e-3, kind
+    # the offset is exact: the observed angle is the true one plus 0.3
+    th_obs = np.arctan2(res["sensor_offset"]["obs"][:, 1], res["sensor_offset"]["obs"][:, 0])
+    th = np.arctan2(np.sin(nominal["qpos"][:, 0] + 0.3), np.cos(nominal["qpos"][:, 0] + 0.3))
+    np.testing.assert_allclose(th_obs, th, atol=1e-5)
+    noise = res["obs_noise"]["obs"] - nominal["obs"]
+    assert 0.05 < noise.std() < 0.2
+
+
+def test_payload_adds_mass_at_the_body():
+    env = env_for("arm2")
+    m = env.physics.apply(jnp.asarray(env.z_of(**{"payload:lower": 0.4})))
+    np.testing.assert_allclose(float(m.body_mass[2]), 1.0, rtol=1e-6)     # 0.6 + 0.4
+    np.testing.assert_allclose(float(m.body_subtreemass[1]), 2.0, rtol=1e-6)
+
+
+def test_servo_backlash_leaves_a_dead_band():
+    """Prismatic servo: a target inside the band gets no spring force, so the carriage stays put."""
+    env = env_for("prismatic")
+
+    @jax.jit
+    def final_q(z):
+        s = env.reset(KEY, z)
+        target = s.data.qpos + 0.001  # 1 mm away; the band is +-2 mm
+        s = jax.lax.fori_loop(0, 30, lambda _, s: env.step(s, target, z), s)
+        return s.data.qpos[0] - target[0]
+
+    nominal = float(final_q(jnp.asarray(env.default_z())))
+    with_band = float(final_q(jnp.asarray(env.z_of(**{"backlash:drive": 0.004}))))
+    assert abs(nominal) < 1e-4          # the servo reaches the target
+    assert abs(with_band) > 0.9e-3      # the target sits inside the band: no motion
