@@ -27,6 +27,7 @@ class Transition:
       next_obs: ``[O]`` observation after the step, *before* any reset (for bootstrapping).
       terminated, truncated: ``[]`` bool.
       z: ``[P]`` physics the step ran under.
+      diverged: ``[]`` 1.0 where the physics diverged in this step (the env was terminated).
     """
 
     obs: jax.Array
@@ -36,6 +37,7 @@ class Transition:
     terminated: jax.Array
     truncated: jax.Array
     z: jax.Array
+    diverged: jax.Array
 
 
 def select(pred, a, b):
@@ -55,5 +57,6 @@ def step_autoreset(env: Env, state: State, z: jax.Array, action: jax.Array, key:
     z_new = sample(k_z)
     fresh = env.reset(k_reset, z_new)
     tr = Transition(obs=state.obs, action=action, reward=nxt.reward, next_obs=nxt.obs,
-                    terminated=nxt.terminated, truncated=nxt.truncated, z=z)
+                    terminated=nxt.terminated, truncated=nxt.truncated, z=z,
+                    diverged=nxt.metrics["diverged"])
     return select(done, fresh, nxt), jnp.where(done, z_new, z), tr, done

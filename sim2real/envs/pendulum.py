@@ -9,7 +9,7 @@ from sim2real.envs.base import Env, EnvConfig
 
 
 class Pendulum(Env):
-    """1 kg at 1 m, 2 Nm motor: too weak to lift the bob directly, so it must pump energy.
+    """Gym Pendulum dynamics (uniform 1 kg, 1 m rod; 2 Nm): too weak to lift it directly, it must pump.
 
     Reward = -(theta^2 + 0.1 theta_dot^2 + 0.001 u^2), theta = 0 upright; 200 steps of 50 ms.
     """

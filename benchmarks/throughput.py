@@ -1,0 +1,167 @@
+"""Env steps per second: sim2real hopper (physics resampled at every reset) vs Brax MJX vs Gymnasium.
+
+    python benchmarks/throughput.py                                   # CPU, batches 64..4096
+    python benchmarks/throughput.py --batches 1024,8192,32768,131072 --tag gpu-h100 --no-gym
+
+All three run a uniform random policy. sim2real: jit(scan) of vmapped ``step_autoreset`` with the
+LSDR context (torso size, density, friction, joint damping) drawn uniformly at every reset.
+Brax: ``brax.envs.get_environment('hopper', backend='mjx')`` wrapped for training (vmap, episode,
+auto-reset), as its PPO runs it. Gymnasium: ``Hopper-v5`` (native MuJoCo) as a sync vector env.
+Each figure is the best of 3 timed repeats after a warm-up call (compilation excluded).
+Writes ``benchmarks/results/throughput_<tag>.csv`` and ``throughput_<tag>.png``.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import platform
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+RESULTS = os.path.join(os.path.dirname(__file__), "results")
+
+
+def time_best(fn, repeats=3):
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        jax.block_until_ready(fn())
+        ts.append(time.perf_counter() - t0)
+    return min(ts)
+
+
+def bench_sim2real(batch: int, steps: int) -> float:
+    from sim2real.envs import make
+    from sim2real.envs.autoreset import step_autoreset
+
+    env = make("hopper")
+    names = ["torso_size", "density", "friction", "joint_damping"]
+    idx = env.spec.indices(names)
+    lo = jnp.asarray([0.03, 700.0, 1.5, 0.5])
+    hi = jnp.asarray([0.07, 1300.0, 2.5, 1.5])
+    base = jnp.asarray(env.default_z())
+
+    def sample(k):
+        return base.at[idx].set(jax.random.uniform(k, (len(names),), minval=lo, maxval=hi))
+
+    keys = jax.random.split(jax.random.PRNGKey(0), batch)
+    z = jax.vmap(sample)(keys)
+    state = jax.vmap(env.reset)(keys, z)
+    step = jax.vmap(lambda s, zz, a, k: step_autoreset(env, s, zz, a, k, sample)[:2])
+
+    @jax.jit
+    def roll(state, z, key):
+        def f(c, k):
+            ka, ks = jax.random.split(k)
+            a = jax.random.uniform(ka, (batch, env.action_size), minval=-1, maxval=1)
+            return step(*c, a, jax.random.split(ks, batch)), None
+
+        return jax.lax.scan(f, (state, z), jax.random.split(key, steps))[0]
+
+    carry = roll(state, z, jax.random.PRNGKey(1))
+    jax.block_until_ready(carry)
+    return batch * steps / time_best(lambda: roll(*carry, jax.random.PRNGKey(2)))
+
+
+def bench_brax(batch: int, steps: int) -> float:
+    from brax import envs
+    from brax.envs.wrappers import training
+
+    env = training.wrap(envs.get_environment("hopper", backend="mjx"), episode_length=1000)
+    state = jax.jit(env.reset)(jax.random.split(jax.random.PRNGKey(0), batch))
+
+    @jax.jit
+    def roll(state, key):
+        def f(s, k):
+            a = jax.random.uniform(k, (batch, env.action_size), minval=-1, maxval=1)
+            return env.step(s, a), None
+
+        return jax.lax.scan(f, state, jax.random.split(key, steps))[0]
+
+    state = roll(state, jax.random.PRNGKey(1))
+    jax.block_until_ready(state)
+    return batch * steps / time_best(lambda: roll(state, jax.random.PRNGKey(2)))
+
+
+def bench_gym(batch: int, total_steps: int) -> float:
+    import gymnasium as gym
+
+    envs = gym.make_vec("Hopper-v5", num_envs=batch, vectorization_mode="sync")
+    envs.reset(seed=0)
+    rng = np.random.default_rng(0)
+    n = max(1, total_steps // batch)
+    acts = rng.uniform(-1, 1, (n, batch, 3)).astype(np.float32)
+
+    def run():
+        for a in acts:
+            envs.step(a)
+        return jnp.zeros(())
+
+    t = time_best(run)
+    envs.close()
+    return batch * n / t
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--batches", default="64,256,1024,4096")
+    ap.add_argument("--steps", type=int, default=100, help="scan length per timed call")
+    ap.add_argument("--gym-steps", type=int, default=20000, help="env steps per timed Gymnasium call")
+    ap.add_argument("--tag", default="cpu")
+    ap.add_argument("--no-brax", action="store_true")
+    ap.add_argument("--no-gym", action="store_true")
+    ap.add_argument("--out", default=RESULTS)
+    args = ap.parse_args()
+    batches = [int(b) for b in args.batches.split(",")]
+    device = f"{jax.devices()[0].device_kind} ({jax.default_backend()}), {os.cpu_count()} CPU cores, {platform.node()}"
+    rows = []
+    for b in batches:
+        row = {"batch": b, "sim2real": bench_sim2real(b, args.steps)}
+        if not args.no_brax:
+            row["brax_mjx"] = bench_brax(b, args.steps)
+        if not args.no_gym:
+            row["gymnasium"] = bench_gym(b, args.gym_steps)
+        rows.append(row)
+        print({k: (round(v) if isinstance(v, float) else v) for k, v in row.items()}, flush=True)
+    if not args.no_gym:
+        rows.append({"batch": 1, "gymnasium": bench_gym(1, args.gym_steps)})
+        print(rows[-1], flush=True)
+    write(rows, args, device)
+
+
+def write(rows, args, device):
+    os.makedirs(args.out, exist_ok=True)
+    cols = ["batch", "sim2real", "brax_mjx", "gymnasium"]
+    path = os.path.join(args.out, f"throughput_{args.tag}.csv")
+    with open(path, "w", newline="") as f:
+        f.write(f"# env-steps/s, hopper, random policy; device: {device}; jax {jax.__version__}\n")
+        w = csv.DictWriter(f, fieldnames=cols)
+        w.writeheader()
+        for r in rows:
+            w.writerow({c: (f"{r[c]:.0f}" if isinstance(r.get(c), float) else r.get(c, "")) for c in cols})
+    print(f"wrote {path}")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for c, style in [("sim2real", "o-"), ("brax_mjx", "s--"), ("gymnasium", "^:")]:
+        pts = [(r["batch"], r[c]) for r in rows if c in r]
+        if pts:
+            ax.loglog(*zip(*sorted(pts)), style, label=c)
+    ax.set_xlabel("parallel envs")
+    ax.set_ylabel("env steps / s")
+    ax.set_title(f"Hopper throughput ({args.tag})")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, f"throughput_{args.tag}.png"), dpi=120)
+
+
+if __name__ == "__main__":
+    main()

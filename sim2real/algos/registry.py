@@ -1,0 +1,39 @@
+"""Algorithm names -> builders. Each algorithm has ``init(key)``, ``update(state)``, ``policy(state)``."""
+from __future__ import annotations
+
+from sim2real import config as config_lib
+from sim2real.physics.params import UnknownNameError, unknown_name_message
+
+
+def _udr(env, cfg):
+    from sim2real.algos.udr import UDR
+
+    if cfg.algo_options:
+        raise config_lib.ConfigError(f"algo 'udr' takes no algo_options (got {sorted(cfg.algo_options)})")
+    return UDR(env, cfg.ppo, cfg.dr, cfg.num_updates)
+
+
+BUILDERS = {"udr": _udr}
+
+
+def register(name, builder):
+    BUILDERS[name] = builder
+
+
+def build(name: str, env, cfg):
+    _load_optional()
+    if name not in BUILDERS:
+        raise UnknownNameError(unknown_name_message("algo", name, sorted(BUILDERS)))
+    return BUILDERS[name](env, cfg)
+
+
+def _load_optional():
+    # algorithms in their own modules register themselves on import
+    import importlib
+
+    for mod in ("sim2real.algos.lsdr", "sim2real.algos.epopt"):
+        try:
+            importlib.import_module(mod)
+        except ModuleNotFoundError as e:
+            if e.name != mod:
+                raise

@@ -1,0 +1,193 @@
+"""Typed configs from YAML plus ``key=value`` overrides, with errors that name the bad key.
+
+    python scripts/train.py config=configs/pendulum_udr.yaml ppo.lr=1e-3 ppo.net.hidden=[128,128]
+
+Values are parsed as YAML (``true``, ``1e-3``, ``[1, 2]``); dotted keys reach nested dataclasses;
+an unknown key is an error that lists the nearest valid keys.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import types
+import typing
+from typing import Any
+
+import yaml
+
+
+class ConfigError(ValueError):
+    """A config file or override that does not fit the typed config."""
+
+
+def _hints(cls) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def all_keys(cls, prefix: str = "") -> list[str]:
+    """Every dotted key of a dataclass config (nested ones included)."""
+    keys = []
+    for f in dataclasses.fields(cls):
+        t = _hints(cls)[f.name]
+        keys.append(prefix + f.name)
+        if dataclasses.is_dataclass(t):
+            keys += all_keys(t, prefix + f.name + ".")
+    return keys
+
+
+def _unknown(key: str, cls, prefix: str) -> ConfigError:
+    valid = all_keys(cls, prefix)
+    close = difflib.get_close_matches(prefix + key, valid, n=3, cutoff=0.5)
+    hint = f" Did you mean: {', '.join(close)}?" if close else ""
+    return ConfigError(f"unknown config key '{prefix}{key}'.{hint} Valid keys: {', '.join(valid)}")
+
+
+def _coerce(value, t, where: str):
+    origin = typing.get_origin(t)
+    args = typing.get_args(t)
+    if t is Any:
+        return value
+    if origin in (typing.Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
+        for a in args:
+            if a is type(None):
+                continue
+            try:
+                return _coerce(value, a, where)
+            except ConfigError:
+                pass
+        raise ConfigError(f"{where}: {value!r} does not fit {t}")
+    if dataclasses.is_dataclass(t):
+        if isinstance(value, t):
+            return value
+        if not isinstance(value, dict):
+            raise ConfigError(f"{where}: expected a mapping of {t.__name__} fields, got {value!r}")
+        return from_dict(t, value, where + ".")
+    if origin in (tuple, list):
+        if isinstance(value, str) or not isinstance(value, (list, tuple)):
+            value = [value]
+        if origin is tuple and len(args) == 2 and args[1] is Ellipsis:
+            return tuple(_coerce(v, args[0], f"{where}[{i}]") for i, v in enumerate(value))
+        if origin is tuple and args:
+            if len(args) != len(value):
+                raise ConfigError(f"{where}: expected {len(args)} values, got {value!r}")
+            return tuple(_coerce(v, a, f"{where}[{i}]") for i, (v, a) in enumerate(zip(args, value)))
+        return list(value)
+    if origin is dict:
+        if not isinstance(value, dict):
+            raise ConfigError(f"{where}: expected a mapping, got {value!r}")
+        return dict(value)
+    if t is bool:
+        if isinstance(value, bool):
+            return value
+        raise ConfigError(f"{where}: expected true/false, got {value!r}")
+    if t is int:
+        if isinstance(value, bool) or not (isinstance(value, int) or (isinstance(value, float) and value.is_integer())):
+            raise ConfigError(f"{where}: expected an integer, got {value!r}")
+        return int(value)
+    if t is float:
+        if isinstance(value, str):  # YAML 1.1 reads "3e-4" (no dot) as a string
+            try:
+                value = float(value)
+            except ValueError:
+                pass
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(f"{where}: expected a number, got {value!r}")
+        return float(value)
+    if t is str:
+        if not isinstance(value, str):
+            raise ConfigError(f"{where}: expected a string, got {value!r}")
+        return value
+    return value
+
+
+def from_dict(cls, d: dict, prefix: str = ""):
+    """Build dataclass ``cls`` from a (nested) dict, checking keys and types."""
+    hints = _hints(cls)
+    names = {f.name for f in dataclasses.fields(cls)}
+    kwargs = {}
+    for k, v in (d or {}).items():
+        if k not in names:
+            raise _unknown(k, cls, prefix)
+        kwargs[k] = _coerce(v, hints[k], prefix + k)
+    return cls(**kwargs)
+
+
+def to_dict(cfg) -> dict:
+    def conv(x):
+        if dataclasses.is_dataclass(x):
+            return {f.name: conv(getattr(x, f.name)) for f in dataclasses.fields(x)}
+        if isinstance(x, (tuple, list)):
+            return [conv(v) for v in x]
+        if isinstance(x, dict):
+            return {k: conv(v) for k, v in x.items()}
+        return x
+
+    return conv(cfg)
+
+
+def _set(d: dict, dotted: str, value, cls):
+    parts = dotted.split(".")
+    cur_cls, cur = cls, d
+    for i, p in enumerate(parts):
+        names = {f.name for f in dataclasses.fields(cur_cls)}
+        if p not in names:
+            raise _unknown(p, cur_cls, ".".join(parts[:i]) + ("." if i else ""))
+        if i == len(parts) - 1:
+            cur[p] = value
+            return
+        t = _hints(cur_cls)[p]
+        if not dataclasses.is_dataclass(t):
+            raise ConfigError(f"'{'.'.join(parts[:i + 1])}' is not a section; cannot set '{dotted}'")
+        cur = cur.setdefault(p, {})
+        if dataclasses.is_dataclass(cur):
+            cur = to_dict(cur)
+        cur_cls = t
+
+
+def _merge(base: dict, extra: dict) -> dict:
+    out = dict(base)
+    for k, v in extra.items():
+        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+def parse_args(argv: list[str]) -> tuple[str | None, dict[str, Any]]:
+    """``['config=a.yaml', 'ppo.lr=1e-3']`` -> ``('a.yaml', {'ppo.lr': 0.001})``."""
+    path, overrides = None, {}
+    for a in argv:
+        if "=" not in a:
+            raise ConfigError(f"argument '{a}' is not of the form key=value")
+        k, v = a.split("=", 1)
+        k = k.strip().lstrip("-")
+        if k == "config":
+            path = v
+        else:
+            overrides[k] = yaml.safe_load(v) if v != "" else ""
+    return path, overrides
+
+
+def load(cls, argv: list[str]):
+    """Config of type ``cls`` from ``config=PATH`` (YAML) and ``key=value`` overrides."""
+    path, overrides = parse_args(argv)
+    data: dict = {}
+    if path:
+        try:
+            with open(path) as f:
+                data = yaml.safe_load(f) or {}
+        except FileNotFoundError:
+            raise ConfigError(f"config file '{path}' not found") from None
+        except yaml.YAMLError as e:
+            raise ConfigError(f"config file '{path}' is not valid YAML: {e}") from None
+        if not isinstance(data, dict):
+            raise ConfigError(f"config file '{path}' must hold a mapping at the top level")
+    nested: dict = {}
+    for k, v in overrides.items():
+        _set(nested, k, v, cls)
+    return from_dict(cls, _merge(data, nested))
+
+
+def save(cfg, path: str) -> None:
+    with open(path, "w") as f:
+        yaml.safe_dump(to_dict(cfg), f, sort_keys=False)

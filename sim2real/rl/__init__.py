@@ -1,0 +1,1 @@
+"""Pure-JAX PPO with MLP, context-conditioned and LSTM policies."""

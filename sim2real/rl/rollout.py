@@ -1,0 +1,138 @@
+"""Batched data collection: ``vmap`` over envs, ``scan`` over time, physics resampled at resets."""
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+from sim2real.envs.autoreset import step_autoreset
+from sim2real.envs.base import Env, State
+from sim2real.rl import networks, normalize
+
+
+@dataclasses.dataclass(frozen=True)
+class Context:
+    """Which physics parameters a context-conditioned policy sees, and how they are scaled.
+
+    ``ctx = (z[idx] - center) / half`` maps the DR box to [-1, 1]. Empty for plain policies.
+    """
+
+    idx: np.ndarray
+    center: np.ndarray
+    half: np.ndarray
+
+    @staticmethod
+    def make(env: Env, names, low, high) -> "Context":
+        low, high = np.asarray(low, np.float32), np.asarray(high, np.float32)
+        return Context(env.spec.indices(list(names)), (low + high) / 2, np.maximum((high - low) / 2, 1e-6))
+
+    @staticmethod
+    def empty() -> "Context":
+        z = np.zeros(0, np.float32)
+        return Context(np.zeros(0, np.int32), z, z + 1)
+
+    def __call__(self, z):
+        return (z[..., self.idx] - self.center) / self.half
+
+    def __len__(self):
+        return len(self.idx)
+
+
+@struct.dataclass
+class Runner:
+    """Env-side state carried between PPO updates (leading axis ``[B]``).
+
+    Attributes:
+      env_state: batched env ``State``.
+      z: ``[B, P]`` physics of each env's current episode.
+      carry: ``[B, H]`` recurrent policy state (H = 0 for feed-forward policies).
+      first: ``[B]`` bool, the next step starts an episode (resets ``carry``).
+      ep_return, ep_length: ``[B]`` running return and length of the current episode.
+    """
+
+    env_state: State
+    z: jax.Array
+    carry: jax.Array
+    first: jax.Array
+    ep_return: jax.Array
+    ep_length: jax.Array
+
+
+@struct.dataclass
+class Batch:
+    """A ``[T, B]`` batch; ``carry0 [B, H]`` is the recurrent state before its first step."""
+
+    obs: jax.Array
+    ctx: jax.Array
+    first: jax.Array
+    action: jax.Array
+    log_prob: jax.Array
+    value: jax.Array
+    next_value: jax.Array
+    reward: jax.Array
+    terminated: jax.Array
+    truncated: jax.Array
+    z: jax.Array
+    raw_obs: jax.Array
+    carry0: jax.Array
+
+
+def to_ctrl(env: Env, action):
+    """Policy units ([-1, 1] after clipping) to the actuators' ctrl range."""
+    a = jnp.clip(action, -1.0, 1.0)
+    lo, hi = env.ctrl_low, env.ctrl_high
+    bounded = np.isfinite(lo) & np.isfinite(hi)
+    lo_, hi_ = np.where(bounded, lo, -1.0), np.where(bounded, hi, 1.0)
+    return jnp.where(bounded, lo_ + (a + 1.0) / 2.0 * (hi_ - lo_), action)
+
+
+def init_runner(env: Env, key, num_envs: int, sample: Callable, carry_size: int) -> Runner:
+    k_z, k_reset = jax.random.split(key)
+    z = jax.vmap(sample)(jax.random.split(k_z, num_envs))
+    state = jax.vmap(env.reset)(jax.random.split(k_reset, num_envs), z)
+    return Runner(state, z, jnp.zeros((num_envs, carry_size)), jnp.ones(num_envs, bool),
+                  jnp.zeros(num_envs), jnp.zeros(num_envs, jnp.int32))
+
+
+def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, key, sample: Callable,
+            num_steps: int, deterministic: bool = False):
+    """Run ``num_steps`` steps of all envs.
+
+    Returns ``(runner, batch [T, B], stats)`` with ``stats`` holding the sums over episodes that
+    ended in this batch (``return_sum``, ``length_sum``, ``episodes``) and ``diverged`` steps.
+    """
+    num_envs = runner.z.shape[0]
+    policy = jax.vmap(net.apply, in_axes=(None, 0, 0, 0, 0))
+
+    def step(r: Runner, k):
+        k_act, k_env = jax.random.split(k)
+        obs = normalize.apply(obs_stats, r.env_state.obs)
+        ctx = ctx_fn(r.z)
+        (mean, log_std, value), carry = policy(params, obs, ctx, r.carry, r.first)
+        action = mean if deterministic else networks.sample_action(k_act, mean, log_std)
+        log_prob = networks.gaussian_log_prob(mean, log_std, action)
+        env_step = lambda s, z, a, kk: step_autoreset(env, s, z, to_ctrl(env, a), kk, sample)
+        state, z, tr, done = jax.vmap(env_step)(r.env_state, r.z, action, jax.random.split(k_env, num_envs))
+        # value of the pre-reset next observation, with the pre-reset recurrent state
+        nobs = normalize.apply(obs_stats, tr.next_obs)
+        (_, _, next_value), _ = policy(params, nobs, ctx, carry, jnp.zeros(num_envs, bool))
+        ep_return = r.ep_return + tr.reward
+        ep_length = r.ep_length + 1
+        out = Batch(obs=obs, ctx=ctx, first=r.first, action=action, log_prob=log_prob, value=value,
+                    next_value=next_value, reward=tr.reward, terminated=tr.terminated,
+                    truncated=tr.truncated, z=r.z, raw_obs=r.env_state.obs, carry0=jnp.zeros(0))
+        ended = dict(return_sum=jnp.sum(jnp.where(done, ep_return, 0.0)),
+                     length_sum=jnp.sum(jnp.where(done, ep_length, 0)),
+                     episodes=jnp.sum(done), diverged=jnp.sum(tr.diverged))
+        r = Runner(state, z, carry, done, jnp.where(done, 0.0, ep_return), jnp.where(done, 0, ep_length))
+        return r, (out, ended)
+
+    carry0 = runner.carry
+    runner, (batch, ended) = jax.lax.scan(step, runner, jax.random.split(key, num_steps))
+    stats = jax.tree_util.tree_map(jnp.sum, ended)
+    return runner, batch.replace(carry0=carry0), stats
+

@@ -1,0 +1,279 @@
+"""Training driver: chunks of ``jit(vmap_seeds(scan(update)))`` with logging and checkpoints between.
+
+The Python loop only logs (CSV, TensorBoard, a progress bar), checkpoints (orbax) and resumes;
+everything inside a chunk is pure and jitted, so an interrupted run resumed from its checkpoint
+ends with the same parameters as an uninterrupted one (``tests/test_train.py``).
+"""
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import os
+import shutil
+import time
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from sim2real import checkpoint
+from sim2real import config as config_lib
+from sim2real.algos.base import DRConfig
+from sim2real.envs import make
+from sim2real.rl.ppo import PPOConfig
+
+
+@dataclasses.dataclass(frozen=True)
+class TrainConfig:
+    """One training run.
+
+    Attributes:
+      name: run name; the run folder is ``out_dir/name``.
+      env: env name (``sim2real.envs.names()``).
+      env_options: EnvConfig overrides, e.g. ``{episode_length: 500}``.
+      algo: ``udr`` (uniform DR; fixed physics when ``dr.params`` is empty), ``lsdr``, ``epopt``.
+      seed: base PRNG seed.
+      num_seeds: independent seeds trained in parallel (vmapped).
+      total_steps: env steps per seed.
+      updates_per_chunk: PPO iterations per jitted chunk (logging/checkpoint granularity).
+      checkpoint_every: chunks between checkpoints (the last chunk is always saved).
+      keep_checkpoints: how many checkpoints to keep.
+      out_dir: parent folder of run folders.
+      resume: continue from the latest checkpoint of ``out_dir/name``.
+      overwrite: delete an existing run folder instead of refusing to start.
+      max_chunks: stop after this many chunks in this invocation (0: run to the end).
+      tensorboard: also write TensorBoard event files.
+      progress: draw a progress bar.
+      ppo: PPO settings.
+      dr: domain-randomisation box.
+      algo_options: algorithm-specific settings (see the algorithm's config class).
+    """
+
+    name: str = "run"
+    env: str = "pendulum"
+    env_options: dict[str, Any] = dataclasses.field(default_factory=dict)
+    algo: str = "udr"
+    seed: int = 0
+    num_seeds: int = 1
+    total_steps: int = 1_000_000
+    updates_per_chunk: int = 10
+    checkpoint_every: int = 1
+    keep_checkpoints: int = 2
+    out_dir: str = "runs"
+    resume: bool = False
+    overwrite: bool = False
+    max_chunks: int = 0
+    tensorboard: bool = True
+    progress: bool = True
+    ppo: PPOConfig = PPOConfig()
+    dr: DRConfig = DRConfig()
+    algo_options: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+    @property
+    def num_updates(self) -> int:
+        return max(1, self.total_steps // self.ppo.batch_size)
+
+    @property
+    def num_chunks(self) -> int:
+        return -(-self.num_updates // self.updates_per_chunk)
+
+
+def build_algo(cfg: TrainConfig, env):
+    from sim2real.algos import registry
+
+    return registry.build(cfg.algo, env, cfg)
+
+
+class Run:
+    """A run folder: resolved config, metrics.csv, TensorBoard events, checkpoints/."""
+
+    def __init__(self, cfg: TrainConfig):
+        self.cfg = cfg
+        self.dir = os.path.join(cfg.out_dir, cfg.name)
+        self.ckpt_dir = os.path.abspath(os.path.join(self.dir, "checkpoints"))
+        self.metrics_path = os.path.join(self.dir, "metrics.csv")
+
+    def prepare(self) -> None:
+        cfg = self.cfg
+        exists = os.path.exists(self.dir)
+        if exists and not cfg.resume:
+            if cfg.overwrite:
+                shutil.rmtree(self.dir)
+            elif os.listdir(self.dir):
+                raise FileExistsError(f"run folder '{self.dir}' exists; pass resume=true to continue it, "
+                                      "overwrite=true to replace it, or another name=")
+        if cfg.resume and not os.path.exists(self.ckpt_dir):
+            raise FileNotFoundError(f"resume=true but '{self.ckpt_dir}' holds no checkpoint")
+        os.makedirs(self.dir, exist_ok=True)
+        config_lib.save(cfg, os.path.join(self.dir, "config.yaml"))
+
+
+def train(cfg: TrainConfig) -> dict:
+    """Run (or resume) training; returns ``{'state', 'metrics', 'run_dir', 'algo'}``."""
+    env = make(cfg.env, **cfg.env_options)
+    algo = build_algo(cfg, env)
+    run = Run(cfg)
+    run.prepare()
+    seeds = jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds)
+    # created under jit, so the state's arrays have exactly the layout chunk outputs have
+    # (an eagerly built state costs a second compilation of the chunk on CPU)
+    init = jax.jit(jax.vmap(algo.init))
+    chunk = jax.jit(jax.vmap(lambda s: jax.lax.scan(lambda c, _: algo.update(c), s, None,
+                                                    length=cfg.updates_per_chunk)))
+    state = init(seeds)
+    mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints)
+    start = 0
+    if cfg.resume:
+        step = mngr.latest_step()
+        if step is None:
+            raise FileNotFoundError(f"resume=true but '{run.ckpt_dir}' holds no checkpoint")
+        state = checkpoint.restore(mngr, step, state)
+        start = step
+    logger = MetricsLogger(run, cfg, resume_from_update=start * cfg.updates_per_chunk)
+    steps_per_update = cfg.ppo.batch_size
+    end = cfg.num_chunks if not cfg.max_chunks else min(cfg.num_chunks, start + cfg.max_chunks)
+    bar = Progress(cfg, total=cfg.num_chunks * cfg.updates_per_chunk * steps_per_update,
+                   done=start * cfg.updates_per_chunk * steps_per_update)
+    last = None
+    try:
+        for c in range(start, end):
+            t0 = time.perf_counter()
+            state, metrics = chunk(state)
+            metrics = jax.tree_util.tree_map(np.asarray, metrics)  # [S, K] per metric
+            dt = time.perf_counter() - t0
+            logger.write(c, metrics, dt)
+            last = metrics
+            done_chunks = c + 1
+            if done_chunks % cfg.checkpoint_every == 0 or done_chunks == end:
+                checkpoint.save(mngr, done_chunks, state)
+            bar.advance(cfg.updates_per_chunk * steps_per_update * cfg.num_seeds / dt,
+                        cfg.updates_per_chunk * steps_per_update, metrics)
+    finally:
+        mngr.wait_until_finished()
+        bar.close()
+        logger.close()
+    return {"state": state, "metrics": last, "run_dir": run.dir, "algo": algo, "env": env}
+
+
+class MetricsLogger:
+    """metrics.csv (one row per update and seed) and TensorBoard scalars (seed means)."""
+
+    def __init__(self, run: Run, cfg: TrainConfig, resume_from_update: int):
+        self.cfg, self.path = cfg, run.metrics_path
+        self.rows_kept = 0
+        if resume_from_update and os.path.exists(self.path):
+            # drop rows logged after the checkpoint we resume from (the interrupted tail)
+            with open(self.path) as f:
+                rows = list(csv.DictReader(f))
+            keep = [r for r in rows if int(r["update"]) < resume_from_update]
+            self.header = list(rows[0].keys()) if rows else None
+            self._rewrite(keep)
+        else:
+            self.header = None
+            if os.path.exists(self.path):
+                os.remove(self.path)
+        self.tb = None
+        if cfg.tensorboard:
+            try:
+                from tensorboardX import SummaryWriter
+
+                self.tb = SummaryWriter(os.path.join(run.dir, "tb"))
+            except ImportError:  # optional at run time; declared in pyproject
+                self.tb = None
+        self.t_start = time.time()
+
+    def _rewrite(self, rows):
+        with open(self.path, "w", newline="") as f:
+            if self.header:
+                w = csv.DictWriter(f, fieldnames=self.header)
+                w.writeheader()
+                w.writerows(rows)
+
+    def write(self, chunk_index: int, metrics: dict, seconds: float):
+        cfg = self.cfg
+        names = sorted(metrics)
+        k = cfg.updates_per_chunk
+        header = ["update", "seed", "env_steps", "wall_seconds"] + names
+        new_file = not os.path.exists(self.path) or os.path.getsize(self.path) == 0
+        with open(self.path, "a", newline="") as f:
+            w = csv.writer(f)
+            if new_file:
+                w.writerow(header)
+            for j in range(k):
+                u = chunk_index * k + j
+                for s in range(cfg.num_seeds):
+                    w.writerow([u, s, (u + 1) * cfg.ppo.batch_size, f"{time.time() - self.t_start:.2f}"]
+                               + [f"{float(metrics[n][s, j]):.6g}" for n in names])
+        if self.tb is not None:
+            u = (chunk_index + 1) * k
+            for n in names:
+                self.tb.add_scalar(n, float(np.nanmean(metrics[n][:, -1])), u * cfg.ppo.batch_size)
+            self.tb.add_scalar("steps_per_second", k * cfg.ppo.batch_size * cfg.num_seeds / seconds,
+                               u * cfg.ppo.batch_size)
+
+    def close(self):
+        if self.tb is not None:
+            self.tb.close()
+
+
+class Progress:
+    """rich progress bar: env steps, steps/s, latest episode return."""
+
+    def __init__(self, cfg: TrainConfig, total: int, done: int):
+        self.enabled = cfg.progress
+        if not self.enabled:
+            return
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress as RP, TextColumn, TimeRemainingColumn
+
+        self.p = RP(TextColumn(f"[bold]{cfg.name}[/] {cfg.env}/{cfg.algo}"), BarColumn(), MofNCompleteColumn(),
+                    TextColumn("{task.fields[info]}"), TimeRemainingColumn())
+        self.p.start()
+        self.task = self.p.add_task("train", total=total, completed=done, info="compiling...")
+
+    def advance(self, sps: float, steps: int, metrics: dict):
+        if not self.enabled:
+            return
+        ret = metrics.get("episode_return")
+        eps = metrics.get("episodes")
+        info = f"{sps:,.0f} steps/s"
+        if ret is not None and eps is not None and eps[:, -1].sum() > 0:
+            r = np.sum(ret * eps) / max(np.sum(eps), 1)
+            info += f"  return {r:,.1f}"
+        self.p.update(self.task, advance=steps, info=info)
+
+    def close(self):
+        if self.enabled:
+            self.p.stop()
+
+
+def load_run(run_dir: str, step: int | None = None):
+    """Config, env, algorithm and restored state of a run folder (for evaluation)."""
+    cfg = config_lib.load(TrainConfig, [f"config={os.path.join(run_dir, 'config.yaml')}"])
+    env = make(cfg.env, **cfg.env_options)
+    algo = build_algo(cfg, env)
+    template = jax.jit(jax.vmap(algo.init))(jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds))
+    ckpt = os.path.join(run_dir, "checkpoints")
+    if not os.path.isdir(ckpt):
+        raise FileNotFoundError(f"no checkpoint in '{ckpt}'")
+    mngr = checkpoint.manager(ckpt, cfg.keep_checkpoints)
+    step = mngr.latest_step() if step is None else step
+    if step is None:
+        raise FileNotFoundError(f"no checkpoint in '{ckpt}'")
+    return cfg, env, algo, checkpoint.restore(mngr, step, template)
+
+
+def summary(metrics: dict) -> dict:
+    """Means over seeds and updates; episode statistics weighted by the episodes that ended."""
+    out = {k: float(jnp.mean(v)) for k, v in metrics.items()}
+    eps = np.asarray(metrics.get("episodes", 0))
+    if np.sum(eps) > 0:
+        for k in ("episode_return", "episode_length"):
+            if k in metrics:
+                out[k] = float(np.sum(np.asarray(metrics[k]) * eps) / np.sum(eps))
+    return out
+
+
+def dumps(d: dict) -> str:
+    return json.dumps(d, indent=2, sort_keys=True)

@@ -1,0 +1,47 @@
+"""Config files and key=value overrides, including the errors users see."""
+import pytest
+
+from sim2real import config as config_lib
+from sim2real.config import ConfigError
+from sim2real.train import TrainConfig
+
+
+def test_yaml_and_overrides(tmp_path):
+    p = tmp_path / "c.yaml"
+    p.write_text("env: hopper\nppo:\n  lr: 0.001\n  net: {hidden: [32, 32]}\n")
+    cfg = config_lib.load(TrainConfig, [f"config={p}", "ppo.lr=3e-4", "ppo.net.use_context=true",
+                                        "dr.params=[friction]", "dr.low=[0.5]", "dr.high=[1.5]", "num_seeds=3"])
+    assert cfg.env == "hopper" and cfg.ppo.lr == 3e-4 and cfg.ppo.net.hidden == (32, 32)
+    assert cfg.ppo.net.use_context is True and cfg.dr.params == ("friction",) and cfg.num_seeds == 3
+
+
+def test_unknown_key_suggests_nearest():
+    with pytest.raises(ConfigError) as e:
+        config_lib.load(TrainConfig, ["ppo.learning_rate=1e-3"])
+    assert "ppo.learning_rate" in str(e.value) and "ppo.lr" in str(e.value)
+    with pytest.raises(ConfigError, match="total_steps"):
+        config_lib.load(TrainConfig, ["total_step=10"])
+
+
+def test_type_errors_name_the_key():
+    with pytest.raises(ConfigError, match="ppo.num_envs"):
+        config_lib.load(TrainConfig, ["ppo.num_envs=many"])
+    with pytest.raises(ConfigError, match="resume"):
+        config_lib.load(TrainConfig, ["resume=maybe"])
+    with pytest.raises(ConfigError, match="not of the form"):
+        config_lib.load(TrainConfig, ["ppo.lr"])
+
+
+def test_missing_or_bad_file(tmp_path):
+    with pytest.raises(ConfigError, match="not found"):
+        config_lib.load(TrainConfig, [f"config={tmp_path / 'nope.yaml'}"])
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("env: [unclosed\n")
+    with pytest.raises(ConfigError, match="not valid YAML"):
+        config_lib.load(TrainConfig, [f"config={bad}"])
+
+
+def test_roundtrip(tmp_path):
+    cfg = config_lib.load(TrainConfig, ["ppo.net.kind=lstm", "dr.fixed={gravity: 9.0}"])
+    config_lib.save(cfg, tmp_path / "c.yaml")
+    assert config_lib.load(TrainConfig, [f"config={tmp_path / 'c.yaml'}"]) == cfg
