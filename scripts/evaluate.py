@@ -37,7 +37,7 @@ def main(argv):
     rets = []
     for s in range(cfg.num_seeds):
         params, stats = algo.policy(jax.tree_util.tree_map(lambda x: x[s], state))
-        rets.append(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"].mean(1))
+        rets.append(np.asarray(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"]).mean(1))
     ret = np.mean(rets, 0).reshape([len(v) for v in axes.values()])
     out = str(args.get("out", os.path.join(str(args["run"]), "eval")))
     os.makedirs(out, exist_ok=True)

@@ -138,6 +138,12 @@ def _set(d: dict, dotted: str, value, cls):
             cur[p] = value
             return
         t = _hints(cur_cls)[p]
+        if typing.get_origin(t) is dict:  # free-form section (checked later by its owner)
+            cur = cur.setdefault(p, {})
+            for q in parts[i + 1:-1]:
+                cur = cur.setdefault(q, {})
+            cur[parts[-1]] = value
+            return
         if not dataclasses.is_dataclass(t):
             raise ConfigError(f"'{'.'.join(parts[:i + 1])}' is not a section; cannot set '{dotted}'")
         cur = cur.setdefault(p, {})

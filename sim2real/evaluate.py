@@ -14,8 +14,9 @@ from sim2real.rl.rollout import to_ctrl
 def episodes(env: Env, ppo: PPO, params, obs_stats, zs, key, num_episodes: int = 1, deterministic: bool = True):
     """Run full episodes for every ``z`` in ``zs [N, P]``.
 
-    Returns a dict of ``[N, E]`` arrays: ``return``, ``length``, and each env metric at the last
-    step of the episode (``final_<metric>``). An episode stops at its first termination/truncation.
+    Returns a dict of ``[N, E]`` jax arrays: ``return``, ``length``, and each env metric at the
+    last step of the episode (``final_<metric>``). An episode stops at its first termination or
+    truncation. Pure: usable inside jit (LSDR evaluates its contexts this way).
     """
     n = zs.shape[0]
     horizon = env.config.episode_length
@@ -46,7 +47,7 @@ def episodes(env: Env, ppo: PPO, params, obs_stats, zs, key, num_episodes: int =
 
     keys = jax.random.split(key, n * num_episodes).reshape(n, num_episodes, -1)
     run = jax.vmap(jax.vmap(one, in_axes=(None, 0)), in_axes=(0, 0))
-    return jax.tree_util.tree_map(np.asarray, run(jnp.asarray(zs), keys))
+    return run(jnp.asarray(zs), keys)
 
 
 def _norm(stats, obs):

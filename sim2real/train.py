@@ -154,6 +154,7 @@ def train(cfg: TrainConfig) -> dict:
         mngr.wait_until_finished()
         bar.close()
         logger.close()
+    export_policy(algo, state, os.path.join(run.dir, "policy.msgpack"))
     return {"state": state, "metrics": last, "run_dir": run.dir, "algo": algo, "env": env}
 
 
@@ -162,7 +163,11 @@ class MetricsLogger:
 
     def __init__(self, run: Run, cfg: TrainConfig, resume_from_update: int):
         self.cfg, self.path = cfg, run.metrics_path
-        self.rows_kept = 0
+        self.arrays_path = os.path.join(run.dir, "arrays.npz")
+        self.arrays = {}
+        if resume_from_update and os.path.exists(self.arrays_path):
+            with np.load(self.arrays_path) as f:
+                self.arrays = {k: f[k][:, :resume_from_update] for k in f.files}
         if resume_from_update and os.path.exists(self.path):
             # drop rows logged after the checkpoint we resume from (the interrupted tail)
             with open(self.path) as f:
@@ -193,6 +198,10 @@ class MetricsLogger:
 
     def write(self, chunk_index: int, metrics: dict, seconds: float):
         cfg = self.cfg
+        arrays = {k: v for k, v in metrics.items() if np.ndim(v) > 2}
+        metrics = {k: v for k, v in metrics.items() if np.ndim(v) <= 2}
+        if arrays:
+            self._write_arrays(arrays)
         names = sorted(metrics)
         k = cfg.updates_per_chunk
         header = ["update", "seed", "env_steps", "wall_seconds"] + names
@@ -212,6 +221,14 @@ class MetricsLogger:
                 self.tb.add_scalar(n, float(np.nanmean(metrics[n][:, -1])), u * cfg.ppo.batch_size)
             self.tb.add_scalar("steps_per_second", k * cfg.ppo.batch_size * cfg.num_seeds / seconds,
                                u * cfg.ppo.batch_size)
+
+    def _write_arrays(self, arrays: dict):
+        """Array-valued metrics (e.g. LSDR's distribution) -> ``arrays.npz``, ``[seed, update, ...]``."""
+        for k, v in arrays.items():
+            self.arrays[k] = np.concatenate([self.arrays[k], v], axis=1) if k in self.arrays else v
+        tmp = self.arrays_path + ".tmp.npz"
+        np.savez_compressed(tmp, **self.arrays)
+        os.replace(tmp, self.arrays_path)
 
     def close(self):
         if self.tb is not None:
@@ -246,6 +263,39 @@ class Progress:
     def close(self):
         if self.enabled:
             self.p.stop()
+
+
+def export_policy(algo, state, path: str) -> None:
+    """Write the policies of all seeds (params + observation statistics) as one msgpack file.
+
+    Small (no env state), so it travels where checkpoints are too big: evaluate it with
+    ``load_policy`` on another machine, e.g. in native MuJoCo.
+    """
+    from flax import serialization
+
+    params, stats = algo.policy(state)
+    tmp = path + ".tmp"
+    with open(tmp, "wb") as f:
+        f.write(serialization.to_bytes({"params": params, "obs_stats": stats}))
+    os.replace(tmp, path)
+
+
+def load_policy(run_dir: str):
+    """``(cfg, env, algo, params, obs_stats)`` from a run folder's ``policy.msgpack`` (leading seed axis)."""
+    from flax import serialization
+
+    cfg = config_lib.load(TrainConfig, [f"config={os.path.join(run_dir, 'config.yaml')}"])
+    env = make(cfg.env, **cfg.env_options)
+    algo = build_algo(cfg, env)
+    template = jax.eval_shape(jax.vmap(algo.init), jax.random.split(jax.random.PRNGKey(0), cfg.num_seeds))
+    params, stats = algo.policy(template)
+    zeros = jax.tree_util.tree_map(lambda x: np.zeros(x.shape, x.dtype), {"params": params, "obs_stats": stats})
+    path = os.path.join(run_dir, "policy.msgpack")
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"no policy.msgpack in '{run_dir}' (was the run finished?)")
+    with open(path, "rb") as f:
+        d = serialization.from_bytes(zeros, f.read())
+    return cfg, env, algo, d["params"], d["obs_stats"]
 
 
 def load_run(run_dir: str, step: int | None = None):

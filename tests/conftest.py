@@ -3,12 +3,14 @@ from __future__ import annotations
 
 import functools
 import os
+import tempfile
 
 
 import jax  # noqa: E402
 
-# identical programs compiled again (each train() builds fresh closures) come from disk
-jax.config.update("jax_compilation_cache_dir", os.path.join(os.path.dirname(__file__), "..", ".jax_cache"))
+# identical programs compiled again (each train() builds fresh closures) come from disk; a fresh
+# folder per session, so nothing compiled on another machine is ever loaded
+jax.config.update("jax_compilation_cache_dir", tempfile.mkdtemp(prefix="sim2real-jax-cache-"))
 jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402

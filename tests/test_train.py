@@ -64,8 +64,8 @@ def test_ppo_learns_pendulum_swing_up(tmp_path):
     env, ppo = out["env"], out["algo"].ppo
     params, stats = out["algo"].policy(jax.tree_util.tree_map(lambda x: x[0], out["state"]))
     res = episodes(env, ppo, params, stats, np.tile(env.default_z(), (32, 1)), jax.random.PRNGKey(7))
-    assert res["return"].mean() > -400, res["return"].mean()
-    assert res["final_upright"].mean() > 0.8
+    assert float(res["return"].mean()) > -400, res["return"].mean()
+    assert float(res["final_upright"].mean()) > 0.8
 
 
 def test_cli_reports_bad_key_and_exits_nonzero(tmp_path):

@@ -31,7 +31,7 @@ def _load_optional():
     # algorithms in their own modules register themselves on import
     import importlib
 
-    for mod in ("sim2real.algos.lsdr", "sim2real.algos.epopt"):
+    for mod in ("sim2real.algos.lsdr", "sim2real.algos.simopt", "sim2real.algos.es_maml"):
         try:
             importlib.import_module(mod)
         except ModuleNotFoundError as e:

@@ -9,6 +9,7 @@ from sim2real.physics.params import UnknownNameError, unknown_name_message
 # name -> "module:Class" (imported lazily so a bad env never breaks the others)
 ENVS = {
     "pendulum": "sim2real.envs.pendulum:Pendulum",
+    "pendulum_balance": "sim2real.envs.pendulum:PendulumBalance",
     "cartpole": "sim2real.envs.cartpole:Cartpole",
     "cartpole_balance": "sim2real.envs.cartpole:CartpoleBalance",
     "hopper": "sim2real.envs.hopper:Hopper",

@@ -127,19 +127,21 @@ class PPO:
         adv, ret = gae_lib.gae(batch.reward * cfg.reward_scale, batch.value, batch.next_value,
                                batch.terminated, batch.truncated, cfg.gamma, cfg.gae_lambda)
         recurrent = cfg.net.kind == "lstm"
+        T, B = batch.first.shape
+        total = T * B
 
         def epoch(carry, k):
             params, opt_state = carry
             n = cfg.num_minibatches
             if recurrent:  # minibatches of whole env sequences: [n, T, b, ...], carry0 [n, b, H]
-                idx = jax.random.permutation(k, cfg.num_envs).reshape(n, cfg.num_envs // n)
+                idx = jax.random.permutation(k, B)[: (B // n) * n].reshape(n, B // n)
                 seq = lambda x: jnp.moveaxis(x[:, idx], 1, 0)
                 mbs = jax.tree_util.tree_map(seq, (batch.replace(carry0=None), adv, ret))
                 mbs = (mbs[0].replace(carry0=batch.carry0[idx]),) + mbs[1:]
             else:          # minibatches of samples: [n, m, ...]
-                perm = jax.random.permutation(k, cfg.batch_size)
-                m = cfg.batch_size // n
-                flat = lambda x: x.reshape((cfg.batch_size,) + x.shape[2:])[perm].reshape((n, m) + x.shape[2:])
+                m = total // n
+                perm = jax.random.permutation(k, total)[: n * m]
+                flat = lambda x: x.reshape((total,) + x.shape[2:])[perm].reshape((n, m) + x.shape[2:])
                 mbs = jax.tree_util.tree_map(flat, (batch.replace(carry0=None), adv, ret))
 
             def minibatch(carry, mb):
@@ -178,19 +180,22 @@ class PPO:
         mean, log_std, value = self._forward(params, mb)
         log_prob = networks.gaussian_log_prob(mean, log_std, mb.action)
         ratio = jnp.exp(log_prob - mb.log_prob)
+        w = mb.valid / jnp.maximum(mb.valid.sum(), 1.0)
+        avg = lambda x: jnp.sum(w * x)
         if cfg.normalize_adv:
-            adv = (adv - adv.mean()) / (adv.std() + 1e-8)
-        pg = -jnp.minimum(ratio * adv, jnp.clip(ratio, 1 - cfg.clip_eps, 1 + cfg.clip_eps) * adv).mean()
+            mu = avg(adv)
+            adv = (adv - mu) / (jnp.sqrt(avg(jnp.square(adv - mu))) + 1e-8)
+        pg = -avg(jnp.minimum(ratio * adv, jnp.clip(ratio, 1 - cfg.clip_eps, 1 + cfg.clip_eps) * adv))
         v_loss = jnp.square(value - ret)
         if cfg.clip_value:
             v_clip = mb.value + jnp.clip(value - mb.value, -cfg.clip_eps, cfg.clip_eps)
             v_loss = jnp.maximum(v_loss, jnp.square(v_clip - ret))
-        v_loss = 0.5 * v_loss.mean()
-        entropy = networks.gaussian_entropy(log_std).mean()
+        v_loss = 0.5 * avg(v_loss)
+        entropy = avg(networks.gaussian_entropy(log_std))
         loss = pg + cfg.vf_coef * v_loss - cfg.ent_coef * entropy
         info = dict(loss=loss, policy_loss=pg, value_loss=v_loss, entropy=entropy,
-                    approx_kl=((ratio - 1) - jnp.log(ratio)).mean(),
-                    clip_frac=(jnp.abs(ratio - 1) > cfg.clip_eps).mean())
+                    approx_kl=avg((ratio - 1) - jnp.log(ratio)),
+                    clip_frac=avg((jnp.abs(ratio - 1) > cfg.clip_eps).astype(jnp.float32)))
         return loss, info
 
     # ------------------------------------------------------------------------------

@@ -64,7 +64,11 @@ class Runner:
 
 @struct.dataclass
 class Batch:
-    """A ``[T, B]`` batch; ``carry0 [B, H]`` is the recurrent state before its first step."""
+    """A ``[T, B]`` batch; ``carry0 [B, H]`` is the recurrent state before its first step.
+
+    ``valid [T, B]`` weights samples in the loss (1 everywhere for ordinary PPO; EPOpt masks the
+    steps after a kept trajectory ended).
+    """
 
     obs: jax.Array
     ctx: jax.Array
@@ -79,6 +83,7 @@ class Batch:
     z: jax.Array
     raw_obs: jax.Array
     carry0: jax.Array
+    valid: jax.Array
 
 
 def to_ctrl(env: Env, action):
@@ -124,7 +129,8 @@ def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, k
         ep_length = r.ep_length + 1
         out = Batch(obs=obs, ctx=ctx, first=r.first, action=action, log_prob=log_prob, value=value,
                     next_value=next_value, reward=tr.reward, terminated=tr.terminated,
-                    truncated=tr.truncated, z=r.z, raw_obs=r.env_state.obs, carry0=jnp.zeros(0))
+                    truncated=tr.truncated, z=r.z, raw_obs=r.env_state.obs, carry0=jnp.zeros(0),
+                    valid=jnp.ones(num_envs))
         ended = dict(return_sum=jnp.sum(jnp.where(done, ep_return, 0.0)),
                      length_sum=jnp.sum(jnp.where(done, ep_length, 0)),
                      episodes=jnp.sum(done), diverged=jnp.sum(tr.diverged))

@@ -1,0 +1,213 @@
+"""LSDR: learn the domain-randomisation distribution while training (seed 000, Alg. 1-2, Eq. 1-2).
+
+Each outer step, in one jitted function:
+
+1. PPO (or EPOpt-PPO) update of the context-conditioned policy pi(a | s, z) with z ~ p_phi at resets.
+2. Every ``dist_every`` steps, ``M`` gradient-ascent steps on
+   ``L_DR(phi) - alpha * KL(p(z) || p_phi(z))`` with the score-function estimator
+   ``1/K sum_i J~(z_i) grad log p_phi(z_i)``, where J~ is the return of K evaluation episodes
+   standardised with exponentially averaged batch statistics, and z_i drawn from the prior p(z)
+   (the paper's fix for collapse of discrete distributions) or from p_phi (``sample_from``).
+
+p(z) is the uniform box ``dr.low..dr.high``; p_phi is ``binned`` (100 bins per dimension) or a
+full-covariance ``gaussian`` (mean at the box centre, variance 1/10 of the box's, as the paper).
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+from flax import struct
+
+from sim2real import config as config_lib
+from sim2real import dists
+from sim2real.algos.base import DRConfig, DRSpace
+from sim2real.algos.registry import register
+from sim2real.dists import binned, gaussian
+from sim2real.envs.base import Env
+from sim2real.evaluate import episodes
+from sim2real.rl import epopt
+from sim2real.rl.ppo import PPO, PPOConfig, PPOState
+from sim2real.rl.rollout import Context
+
+
+@dataclasses.dataclass(frozen=True)
+class LSDRConfig:
+    """LSDR settings (``algo_options`` of a run).
+
+    Attributes:
+      dist: ``binned`` | ``gaussian``.
+      num_bins: bins per dimension of the binned distribution.
+      init_var_fraction: Gaussian initial variance as a fraction of the prior's (paper: 0.1).
+      alpha: weight of the KL(p || p_phi) regulariser.
+      lr: Adam step size on phi.
+      grad_steps: M, gradient steps per distribution update (on the same K returns).
+      num_contexts: K, evaluation episodes per distribution update.
+      sample_from: ``prior`` (p(z), biased but avoids collapse) | ``learned`` (p_phi).
+      dist_every: PPO updates between distribution updates.
+      dist_start: PPO updates before the first distribution update (let the policy learn first:
+        the returns of an untrained policy say little about which physics is solvable).
+      ema: decay of the exponential return statistics used to standardise J.
+      eval_horizon: steps of each evaluation episode (0: the env's episode length).
+      policy_optimizer: ``ppo`` | ``epopt``.
+      epopt: EPOpt settings when ``policy_optimizer == 'epopt'``.
+    """
+
+    dist: str = "binned"
+    num_bins: int = 100
+    init_var_fraction: float = 0.1
+    alpha: float = 1.0
+    lr: float = 0.05
+    grad_steps: int = 10
+    num_contexts: int = 64
+    sample_from: str = "prior"
+    dist_every: int = 1
+    dist_start: int = 0
+    ema: float = 0.9
+    eval_horizon: int = 0
+    policy_optimizer: str = "ppo"
+    epopt: epopt.EPOptConfig = epopt.EPOptConfig()
+
+
+@struct.dataclass
+class LSDRState:
+    ppo: PPOState
+    phi: object          # the distribution pytree (Binned or Gaussian)
+    phi_opt: optax.OptState
+    ret_mean: jax.Array  # exponential return statistics
+    ret_var: jax.Array
+    stats_init: jax.Array
+    key: jax.Array
+    step: jax.Array
+
+
+class LSDR:
+    """LSDR (and EPOpt-LSDR) around PPO; also runs fixed uniform DR with ``learn_dist=False``."""
+
+    def __init__(self, env: Env, ppo_cfg: PPOConfig, dr: DRConfig, cfg: LSDRConfig, num_updates: int,
+                 learn_dist: bool = True):
+        if not dr.params:
+            raise ValueError("LSDR needs dr.params / dr.low / dr.high: the prior box p(z)")
+        if cfg.dist not in ("binned", "gaussian"):
+            raise ValueError(f"lsdr dist '{cfg.dist}' unknown: binned, gaussian")
+        if cfg.sample_from not in ("prior", "learned"):
+            raise ValueError(f"lsdr sample_from '{cfg.sample_from}' unknown: prior, learned")
+        if cfg.policy_optimizer not in ("ppo", "epopt"):
+            raise ValueError(f"lsdr policy_optimizer '{cfg.policy_optimizer}' unknown: ppo, epopt")
+        self.env, self.cfg, self.learn_dist = env, cfg, learn_dist
+        self.space = DRSpace(env, dr)
+        ctx = Context.make(env, self.space.names, self.space.low, self.space.high)
+        self.ppo = PPO(env, ppo_cfg, num_updates, ctx)
+        self.tx = optax.adam(cfg.lr)
+        self.horizon = cfg.eval_horizon or env.config.episode_length
+        self.eval_env = env if self.horizon == env.config.episode_length else env.__class__(
+            dataclasses.replace(env.config, episode_length=self.horizon))
+
+    # ---------------------------------------------------------------------- distributions ----
+    def init_dist(self):
+        lo, hi = self.space.low, self.space.high
+        if self.cfg.dist == "binned":
+            return binned.make(lo, hi, self.cfg.num_bins)
+        std = np.sqrt(self.cfg.init_var_fraction * (hi - lo) ** 2 / 12.0)
+        return gaussian.make((lo + hi) / 2, std)
+
+    def sampler(self, phi):
+        return lambda key: self.space.expand(dists.sample(key, phi))
+
+    def prior_sample(self, key, n):
+        return jax.random.uniform(key, (n, len(self.space)), minval=self.space.low, maxval=self.space.high)
+
+    # ------------------------------------------------------------------------------------------
+    def init(self, key) -> LSDRState:
+        k_ppo, k_next = jax.random.split(key)
+        phi = self.init_dist()
+        return LSDRState(self.ppo.init(k_ppo, self.sampler(phi)), phi, self.tx.init(phi), jnp.zeros(()),
+                         jnp.ones(()), jnp.zeros((), bool), k_next, jnp.zeros((), jnp.int32))
+
+    def update(self, st: LSDRState):
+        cfg = self.cfg
+        sample = self.sampler(st.phi)
+        if cfg.policy_optimizer == "epopt":
+            ppo_st, metrics = epopt.update(self.ppo, cfg.epopt, st.ppo, sample)
+        else:
+            ppo_st, metrics = self.ppo.update(st.ppo, sample)
+        st = st.replace(ppo=ppo_st, step=st.step + 1)
+        if self.learn_dist:
+            do = ((st.step % cfg.dist_every) == 0) & (st.step > cfg.dist_start)
+            new, dm = self._update_dist(st)
+            st = jax.tree_util.tree_map(lambda a, b: jnp.where(do, a, b), new, st)
+            metrics.update({k: jnp.where(do, v, jnp.nan) for k, v in dm.items()})
+        metrics.update(self.describe(st.phi))
+        return st, metrics
+
+    def _update_dist(self, st: LSDRState):
+        cfg = self.cfg
+        key, k_z, k_ep = jax.random.split(st.key, 3)
+        if cfg.sample_from == "prior":
+            z_sub = self.prior_sample(k_z, cfg.num_contexts)
+        else:
+            z_sub = dists.sample(k_z, st.phi, cfg.num_contexts)
+        zs = jax.vmap(self.space.expand)(z_sub)
+        res = episodes(self.eval_env, self.ppo, st.ppo.params, st.ppo.obs_stats, zs, k_ep, 1)
+        J = res["return"][:, 0]
+        # exponentially averaged batch statistics standardise J so both terms of Eq. 1 have similar scale
+        b_mean, b_var = J.mean(), J.var()
+        mean = jnp.where(st.stats_init, cfg.ema * st.ret_mean + (1 - cfg.ema) * b_mean, b_mean)
+        var = jnp.where(st.stats_init, cfg.ema * st.ret_var + (1 - cfg.ema) * b_var, b_var)
+        Jt = (J - mean) / jnp.sqrt(var + 1e-8)
+        phi, opt = self.ascend(st.phi, st.phi_opt, z_sub, Jt)
+        st = st.replace(phi=phi, phi_opt=opt, ret_mean=mean, ret_var=var, stats_init=jnp.ones((), bool), key=key)
+        return st, {"dist_eval_return": J.mean()}
+
+    def ascend(self, phi, opt, z_sub, Jt):
+        """M Adam steps on ``mean(Jt * log p_phi(z)) - alpha * KL(p || p_phi)`` (Eq. 2).
+
+        Args:
+          phi, opt: distribution and its optimiser state.
+          z_sub: ``[K, D]`` evaluated contexts; Jt: ``[K]`` their standardised returns.
+        """
+        cfg = self.cfg
+        lo, hi = jnp.asarray(self.space.low), jnp.asarray(self.space.high)
+        z_in = jnp.clip(z_sub, lo, hi - 1e-6 * (hi - lo))  # learned samples may leave the box
+
+        def objective(phi):
+            score = jnp.mean(Jt * dists.log_prob(phi, z_in))
+            return score - cfg.alpha * dists.kl_from_uniform(lo, hi, phi)
+
+        def step(carry, _):
+            phi, opt = carry
+            g = jax.grad(objective)(phi)
+            g = jax.tree_util.tree_map(lambda x: -jnp.nan_to_num(x), g)  # optax minimises
+            if isinstance(g, binned.Binned):  # the bins are fixed: only the logits learn
+                g = g.replace(low=jnp.zeros_like(g.low), high=jnp.zeros_like(g.high))
+            upd, opt = self.tx.update(g, opt, phi)
+            return (optax.apply_updates(phi, upd), opt), None
+
+        return jax.lax.scan(step, (phi, opt), None, length=cfg.grad_steps)[0]
+
+    def describe(self, phi) -> dict:
+        """Scalar summaries plus the distribution itself (arrays, for evolution plots)."""
+        lo, hi = jnp.asarray(self.space.low), jnp.asarray(self.space.high)
+        out = {"dist_entropy": dists.entropy(phi), "dist_kl_prior": dists.kl_from_uniform(lo, hi, phi)}
+        if isinstance(phi, binned.Binned):
+            out["dist_probs"] = binned.probs(phi)           # [K, bins]
+        else:
+            out["dist_mean"] = phi.mean                      # [K]
+            out["dist_cov"] = gaussian.cov(phi)              # [K, K]
+        return out
+
+    def policy(self, st: LSDRState):
+        return st.ppo.params, st.ppo.obs_stats
+
+
+def _build(env, cfg, learn_dist=True):
+    opts = config_lib.from_dict(LSDRConfig, cfg.algo_options, "algo_options.")
+    return LSDR(env, cfg.ppo, cfg.dr, opts, cfg.num_updates, learn_dist=learn_dist)
+
+
+register("lsdr", _build)
+# the fixed-DR baseline in the same harness (same context-conditioned policy, same PPO/EPOpt)
+register("fixed_dr", lambda env, cfg: _build(env, cfg, learn_dist=False))
