@@ -1,0 +1,76 @@
+"""Brax's own PPO on Brax's MJX hopper, with our hopper run's budget and hyper-parameters.
+
+    python benchmarks/brax_ppo_hopper.py num_timesteps=100000000 num_envs=4096 unroll_length=32 ...
+
+Prints evaluation returns against wall time (Brax evaluates ``num_evals`` times with 128 envs)
+and writes ``<out>/brax_ppo_hopper.csv``. Brax 0.14.2 calls ``jax.device_put_replicated``, which
+JAX 0.11 removed; a one-device shim is installed when it is missing.
+"""
+from __future__ import annotations
+
+import csv
+import functools
+import json
+import os
+import sys
+import time
+
+import jax
+import jax.numpy as jnp
+
+if not hasattr(jax, "device_put_replicated"):  # removed in JAX 0.11; brax 0.14.2 still calls it
+    def _device_put_replicated(x, devices):
+        return jax.tree_util.tree_map(lambda a: jax.device_put(jnp.stack([jnp.asarray(a)] * len(devices)), devices[0]), x)
+
+    jax.device_put_replicated = _device_put_replicated
+
+DEFAULTS = dict(num_timesteps=100_000_000, num_envs=4096, unroll_length=32, num_minibatches=16,
+                num_updates_per_batch=4, learning_rate=3e-4, discounting=0.99, gae_lambda=0.95,
+                reward_scaling=0.1, entropy_cost=0.0, clipping_epsilon=0.2, max_grad_norm=0.5,
+                num_evals=11, hidden=128, seed=0, out=".")
+
+
+def main(argv):
+    from brax import envs
+    from brax.training.agents.ppo import networks as ppo_networks
+    from brax.training.agents.ppo import train as ppo
+
+    args = dict(DEFAULTS)
+    for a in argv:
+        k, v = a.split("=", 1)
+        if k not in args:
+            raise SystemExit(f"unknown argument {k}; known: {sorted(args)}")
+        args[k] = type(DEFAULTS[k])(float(v)) if isinstance(DEFAULTS[k], (int, float)) else v
+    env = envs.get_environment("hopper", backend="mjx")
+    # env steps per update = batch_size * num_minibatches * unroll_length = num_envs * unroll_length
+    batch_size = args["num_envs"] // args["num_minibatches"]
+    net = functools.partial(ppo_networks.make_ppo_networks, policy_hidden_layer_sizes=(args["hidden"],) * 2,
+                            value_hidden_layer_sizes=(args["hidden"],) * 2)
+    rows, t0 = [], time.time()
+
+    def progress(step, metrics):
+        rows.append({"env_steps": int(step), "wall_seconds": round(time.time() - t0, 1),
+                     "eval_return": float(metrics.get("eval/episode_reward", float("nan")))})
+        print(json.dumps(rows[-1]), flush=True)
+
+    ppo.train(environment=env, num_timesteps=args["num_timesteps"], episode_length=1000, num_envs=args["num_envs"],
+              unroll_length=args["unroll_length"], batch_size=batch_size, num_minibatches=args["num_minibatches"],
+              num_updates_per_batch=args["num_updates_per_batch"], learning_rate=args["learning_rate"],
+              discounting=args["discounting"], gae_lambda=args["gae_lambda"], reward_scaling=args["reward_scaling"],
+              entropy_cost=args["entropy_cost"], clipping_epsilon=args["clipping_epsilon"],
+              max_grad_norm=args["max_grad_norm"], normalize_observations=True,
+              num_evals=args["num_evals"], network_factory=net, seed=args["seed"], progress_fn=progress)
+    total = time.time() - t0
+    os.makedirs(args["out"], exist_ok=True)
+    with open(os.path.join(args["out"], "brax_ppo_hopper.csv"), "w", newline="") as f:
+        f.write(f"# brax {__import__('brax').__version__} PPO, hopper (mjx), device {jax.devices()[0].device_kind}, "
+                f"args {json.dumps(args)}\n")
+        w = csv.DictWriter(f, fieldnames=["env_steps", "wall_seconds", "eval_return"])
+        w.writeheader()
+        w.writerows(rows)
+    print("SUMMARY", json.dumps({"brax_total_seconds": round(total, 1), "final_eval_return": rows[-1]["eval_return"],
+                                 "steps_per_second_incl_evals": round(rows[-1]["env_steps"] / max(total, 1e-9))}))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
