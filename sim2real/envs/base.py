@@ -26,7 +26,7 @@ import numpy as np
 from flax import struct
 from mujoco import mjx
 
-from sim2real.physics import catalog
+from sim2real.physics import catalog, stepper
 from sim2real.physics.effects import Effects, EffectsConfig, EffectState
 from sim2real.physics.model_apply import PhysicsModel
 from sim2real.physics.params import Param, ParamSpec, clip
@@ -184,17 +184,8 @@ class Env:
         model = self.physics.apply(z)
         data0 = state.data
         ctrl = jnp.clip(action, self.ctrl_low, self.ctrl_high)
-        ctrl, eff = self.effects.actuate(z, state.effects, ctrl, data0.qpos, self.dt)
-        data = data0.replace(ctrl=ctrl)
-
-        def substep(d, _):
-            dofs, extra = self.effects.friction_damping(z, d.qvel)
-            m = model
-            if dofs.size:
-                m = model.replace(dof_damping=model.dof_damping.at[dofs].add(extra))
-            return mjx.step(m, d), None
-
-        data, _ = jax.lax.scan(substep, data, None, length=self.config.frame_skip)
+        data, eff = stepper.advance(self.effects, model, z, data0, state.effects, ctrl, self.dt,
+                                    self.config.frame_skip)
 
         ok = (jnp.all(jnp.abs(data.qpos) < MAX_STATE) & jnp.all(jnp.abs(data.qvel) < MAX_STATE)
               & jnp.isfinite(data.qacc).all())

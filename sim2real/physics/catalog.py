@@ -38,7 +38,7 @@ ACTUATOR_EFFECTS = {
     "motor_lag": (0.0, 0.0, 1.0, "s", "time constant of a first-order lag on the actuator command"),
 }
 BODY_EFFECTS = {
-    "payload": (0.0, 0.0, 1e3, "kg", "point mass added at the body's centre of mass"),
+    "payload": (0.0, 0.0, 1e3, "kg", "point mass at the body's payload_<body> site (else its centre of mass)"),
 }
 
 

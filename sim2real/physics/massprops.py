@@ -135,6 +135,16 @@ def body_mass_properties(bg: BodyGeoms, geom_size: jnp.ndarray, density_scale):
     return mass.sum(), com, evals, mat_to_quat(bg.irot @ evecs)
 
 
+def quat_to_mat(q: jnp.ndarray) -> jnp.ndarray:
+    """Rotation matrix ``[3, 3]`` of a unit quaternion ``[4]`` (w, x, y, z)."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    return jnp.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
 def mat_to_quat(r: jnp.ndarray) -> jnp.ndarray:
     """Unit quaternion ``[4]`` (w, x, y, z) of a rotation matrix ``[3, 3]`` (Shepperd's method)."""
     t = jnp.trace(r)

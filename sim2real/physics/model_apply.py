@@ -56,6 +56,15 @@ class PhysicsModel:
         # robot geoms that collide with something (a friction index of -1 means all of them)
         self.touching_geoms = np.array([g for g in range(m.ngeom) if m.geom_bodyid[g] > 0 and m.geom_contype[g] > 0],
                                        np.int32)
+        # where each body's payload sits: a site named payload_<body>, else the centre of mass
+        self.payload_pos = {}
+        for _, p in spec.of_kind("payload"):
+            name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, p.index)
+            sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, f"payload_{name}")
+            if sid >= 0:
+                if m.site_bodyid[sid] != p.index:
+                    raise ValueError(f"site 'payload_{name}' must belong to body '{name}'")
+                self.payload_pos[p.index] = np.asarray(m.site_pos[sid], np.float32)
         # parent chain for subtree masses (static)
         self.parent = np.asarray(m.body_parentid)
 
@@ -91,8 +100,8 @@ class PhysicsModel:
             scale = z[i] / p.default
             f["body_mass"] = get("body_mass").at[p.index].multiply(scale)
             f["body_inertia"] = get("body_inertia").at[p.index].multiply(scale)
-        for i, p in spec.of_kind("payload"):  # point mass at the centre of mass: inertia unchanged
-            f["body_mass"] = get("body_mass").at[p.index].add(z[i])
+        for i, p in spec.of_kind("payload"):
+            f.update(self._add_payload(get, p.index, z[i]))
         if "body_mass" in f:
             f["body_subtreemass"] = self._subtree_mass(f["body_mass"])
 
@@ -106,6 +115,8 @@ class PhysicsModel:
             f["dof_damping"] = get("dof_damping").at[self.joint_damping_dofs].set(z[spec.index("joint_damping")])
         if "damping_scale" in spec and len(self.joint_damping_dofs):
             f["dof_damping"] = get("dof_damping").at[self.joint_damping_dofs].multiply(z[spec.index("damping_scale")])
+        for i, p in spec.of_kind("dof_damping"):
+            f["dof_damping"] = get("dof_damping").at[self.mj.jnt_dofadr[p.index]].set(z[i])
         for i, p in spec.of_kind("viscous"):
             f["dof_damping"] = get("dof_damping").at[self.mj.jnt_dofadr[p.index]].add(z[i])
         for i, p in spec.of_kind("stiffness"):
@@ -133,6 +144,27 @@ class PhysicsModel:
             g = z[spec.index("gravity")]
             model = model.replace(opt=model.opt.replace(gravity=jnp.array([0.0, 0.0, -1.0]) * g))
         return model
+
+    def _add_payload(self, get, b: int, mp):
+        """Point mass ``mp`` at the body's ``payload_<body>`` site (its centre of mass if none).
+
+        Mass, centre of mass and inertia follow (parallel-axis theorem); the result is kept
+        diagonal in the body's principal frame, exact for a payload on a principal axis through
+        the centre of mass, as at the tip of a link.
+        """
+        m, c = get("body_mass")[b], get("body_ipos")[b]
+        p = jnp.asarray(self.payload_pos.get(b, c))
+        rot = massprops.quat_to_mat(get("body_iquat")[b])
+        i_body = rot @ jnp.diag(get("body_inertia")[b]) @ rot.T
+        c_new = (m * c + mp * p) / (m + mp)
+
+        def shift(mass, r):
+            return mass * (jnp.dot(r, r) * jnp.eye(3) - jnp.outer(r, r))
+
+        total = i_body + shift(m, c - c_new) + shift(mp, p - c_new)
+        diag = jnp.diagonal(rot.T @ total @ rot)
+        return {"body_mass": get("body_mass").at[b].add(mp), "body_ipos": get("body_ipos").at[b].set(c_new),
+                "body_inertia": get("body_inertia").at[b].set(diag)}
 
     def _subtree_mass(self, body_mass: jnp.ndarray) -> jnp.ndarray:
         sub = body_mass

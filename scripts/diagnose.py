@@ -1,0 +1,50 @@
+"""Diagnose why a simulator and real recordings disagree.
+
+    python scripts/diagnose.py model=PATH.xml recordings='[a.csv,b.csv]' heldout='[c.csv]' out=DIR
+
+With no model and no recordings it diagnoses the bundled EMPS hardware data (the demo):
+nominal axis model (mass + viscous friction under the drive's PD loop), fitted on DATA_EMPS,
+validated on DATA_EMPS_PULSES. Any field of ``sim2real.sysid.diagnose.DiagnoseConfig`` can be
+set as key=value. Writes DIR/diagnosis.json, DIR/report.md, DIR/fitted.xml and the figures.
+"""
+import os
+import sys
+
+from sim2real.cli import main_guard
+
+
+def main(argv):
+    from sim2real import config as config_lib
+    from sim2real.sysid import emps
+    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
+
+    cfg = config_lib.load(DiagnoseConfig, argv)
+    demo = not cfg.model and not cfg.recordings
+    if demo:
+        recs = emps.recordings(os.path.join(os.path.dirname(os.path.abspath(cfg.out)), "emps_recordings"))
+        cfg = config_lib.load(DiagnoseConfig, argv + [f"model={emps.NOMINAL_XML}",
+                                                      f"recordings=[{recs['estimation']}]",
+                                                      f"heldout=[{recs['validation']}]"])
+    d = diagnose(cfg)
+    sel = d["effects"][0]
+    print(f"selected: {sel['effect']}" + (f" at {sel['target']}" if sel["target"] else "")
+          + f" (confidence {d['confidence']:.2f})")
+    for k, v in sel["params"].items():
+        print(f"  {k} = {v:.6g}")
+    for note in d["notes"]:
+        print(f"  {note}")
+    f = d["fit"]
+    print(f"held-out NRMSE ({f['metric']}): {f['before']:.4g} -> {f['after']:.4g} "
+          f"({100 * f['reduction']:.1f}% lower)")
+    if demo:
+        fc = sel["params"].get("coulomb:axis")
+        asym = sel["params"].get("coulomb_asym:axis", 0.0)
+        ref = emps.REFERENCE
+        if fc is not None:
+            print(f"EMPS reference: Fc = {ref['Fc']} N (found {fc:.4g} N, {100 * abs(fc - ref['Fc']) / ref['Fc']:.1f}% off), "
+                  f"offset = {ref['offset']} N (found {fc * asym:.4g} N)")
+    print(f"report: {os.path.join(cfg.out, 'report.md')}  ({d['seconds']} s)")
+
+
+if __name__ == "__main__":
+    main_guard(main, sys.argv[1:])

@@ -1,0 +1,38 @@
+"""One control step of MJX physics with the effects library: shared by envs and the diagnosis tool."""
+from __future__ import annotations
+
+import jax
+from mujoco import mjx
+
+from sim2real.physics.effects import Effects, EffectState
+
+
+def advance(effects: Effects, model: mjx.Model, z, data: mjx.Data, es: EffectState, ctrl, dt: float,
+            substeps: int, qfrc_applied=None):
+    """Apply ``ctrl [nu]`` through the effects and run ``substeps`` physics steps.
+
+    Args:
+      effects: effect application for this model.
+      model: ``physics.apply(z)``.
+      z: ``[P]`` clipped physics vector.
+      data: current MJX data.
+      es: effect state.
+      ctrl: command in ctrl units.
+      dt: control period (s).
+      substeps: physics steps per control step.
+      qfrc_applied: optional ``[nv]`` known external generalised force held over the step.
+    Returns:
+      ``(data, effect_state)`` after the step.
+    """
+    u, es = effects.actuate(z, es, ctrl, data.qpos, dt)
+    data = data.replace(ctrl=u)
+    if qfrc_applied is not None:
+        data = data.replace(qfrc_applied=qfrc_applied)
+
+    def substep(d, _):
+        dofs, extra = effects.friction_damping(z, d.qvel)
+        m = model.replace(dof_damping=model.dof_damping.at[dofs].add(extra)) if dofs.size else model
+        return mjx.step(m, d), None
+
+    data, _ = jax.lax.scan(substep, data, None, length=substeps)
+    return data, es

@@ -1,0 +1,35 @@
+"""The EMPS benchmark (real hardware, bundled in ``sysid/data/emps``): conversion to recordings."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+from scipy.io import loadmat
+
+from sim2real.sysid.recordings import RecordingError, save_csv
+
+DATA = os.path.join(os.path.dirname(__file__), "data", "emps")
+NOMINAL_XML = os.path.join(DATA, "emps_nominal.xml")
+FILES = {"estimation": "DATA_EMPS.mat", "validation": "DATA_EMPS_PULSES.mat"}
+# the benchmark's reference inverse-dynamics model (README): what the diagnosis should recover
+REFERENCE = {"M": 95.1089, "Fv": 203.5034, "Fc": 20.3935, "offset": -3.1648}
+
+
+def convert(mat_path: str, csv_path: str) -> str:
+    """EMPS ``.mat`` -> recording CSV; returns ``csv_path``."""
+    d = loadmat(mat_path)
+    for k in ("t", "qm", "qg", "vir", "gtau"):
+        if k not in d:
+            raise RecordingError(f"{mat_path}: variable '{k}' missing; not an EMPS file")
+    cols = {"qpos:axis": d["qm"].ravel(), "ctrl:drive": d["qg"].ravel(),
+            "force:drive": float(np.ravel(d["gtau"])[0]) * d["vir"].ravel()}
+    if "pulses_N" in d:
+        cols["qfrc:axis"] = d["pulses_N"].ravel().astype(float)
+    save_csv(csv_path, d["t"].ravel(), cols)
+    return csv_path
+
+
+def recordings(folder: str) -> dict[str, str]:
+    """Convert both bundled files into ``folder``; returns ``{'estimation': path, 'validation': path}``."""
+    os.makedirs(folder, exist_ok=True)
+    return {k: convert(os.path.join(DATA, f), os.path.join(folder, f.replace(".mat", ".csv"))) for k, f in FILES.items()}

@@ -1,0 +1,188 @@
+"""Recordings of a real (or simulated) system: load, validate against a model, hold as arrays.
+
+Format (README, "Recording format"): one table per file, a row per sample.
+
+=====================  ===========================================================
+column                 meaning
+=====================  ===========================================================
+``time``               seconds, strictly increasing, uniform sample rate
+``qpos:<joint>``       measured joint position (m or rad), at least one
+``qvel:<joint>``       measured joint velocity (optional; else differentiated)
+``ctrl:<actuator>``    command sent to the actuator, one per actuator of the model
+``force:<actuator>``   measured actuator force (optional, e.g. from motor current)
+``qfrc:<joint>``       known external generalised force on the joint (optional)
+=====================  ===========================================================
+
+CSV (header row), NPZ (arrays named like the columns) and MATLAB ``.mat`` (variables named like
+the columns with ``:`` written as ``__``, e.g. ``qpos__axis``) are read. Every problem raises
+:class:`RecordingError` naming the file and the column or row.
+"""
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import mujoco
+import numpy as np
+
+KINDS = ("qpos", "qvel", "ctrl", "force", "qfrc")
+_TARGET = {"qpos": "joint", "qvel": "joint", "qfrc": "joint", "ctrl": "actuator", "force": "actuator"}
+
+
+class RecordingError(ValueError):
+    """A recording that cannot be used; the message names file, column and row."""
+
+
+@dataclasses.dataclass
+class Recording:
+    """One validated recording.
+
+    Attributes:
+      path: where it came from.
+      time: ``[T]`` seconds.
+      columns: ``{'qpos:axis': [T], ...}`` float64 arrays.
+    """
+
+    path: str
+    time: np.ndarray
+    columns: dict[str, np.ndarray]
+
+    @property
+    def name(self) -> str:
+        return os.path.splitext(os.path.basename(self.path))[0]
+
+    @property
+    def dt(self) -> float:
+        return float(np.median(np.diff(self.time)))
+
+    def names(self, kind: str) -> list[str]:
+        return [c.split(":", 1)[1] for c in self.columns if c.startswith(kind + ":")]
+
+    def get(self, kind: str, name: str) -> np.ndarray | None:
+        return self.columns.get(f"{kind}:{name}")
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    def slice(self, start: int, stop: int) -> "Recording":
+        return Recording(f"{self.path}[{start}:{stop}]", self.time[start:stop],
+                         {k: v[start:stop] for k, v in self.columns.items()})
+
+
+def _read_table(path: str) -> dict[str, np.ndarray]:
+    ext = os.path.splitext(path)[1].lower()
+    if not os.path.exists(path):
+        raise RecordingError(f"{path}: file not found")
+    try:
+        if ext == ".csv":
+            with open(path) as f:
+                header = f.readline().strip()
+            if not header:
+                raise RecordingError(f"{path}: empty file (expected a header row)")
+            names = [h.strip() for h in header.split(",")]
+            if len(set(names)) != len(names):
+                dup = sorted({n for n in names if names.count(n) > 1})
+                raise RecordingError(f"{path}: duplicated column(s) {dup}")
+            try:
+                data = np.genfromtxt(path, delimiter=",", skip_header=1, dtype=np.float64, invalid_raise=True,
+                                     ndmin=2)
+            except ValueError as e:
+                raise RecordingError(f"{path}: malformed CSV ({e})") from None
+            if data.size == 0:
+                raise RecordingError(f"{path}: no data rows")
+            if data.shape[1] != len(names):
+                raise RecordingError(f"{path}: {data.shape[1]} values per row but {len(names)} header columns")
+            return {n: data[:, i] for i, n in enumerate(names)}
+        if ext == ".npz":
+            with np.load(path) as f:
+                return {k: np.asarray(f[k], np.float64).ravel() for k in f.files}
+        if ext == ".mat":
+            from scipy.io import loadmat
+
+            raw = loadmat(path)
+            return {k.replace("__", ":"): np.asarray(v, np.float64).ravel()
+                    for k, v in raw.items() if not k.startswith("__")}
+    except RecordingError:
+        raise
+    except Exception as e:  # unreadable file of a known type
+        raise RecordingError(f"{path}: cannot read ({type(e).__name__}: {e})") from None
+    raise RecordingError(f"{path}: unsupported file type '{ext}' (use .csv, .npz or .mat)")
+
+
+def load(path: str, model: mujoco.MjModel) -> Recording:
+    """Read and validate one recording against ``model`` (names, shapes, values, time)."""
+    cols = _read_table(path)
+    if "time" not in cols:
+        raise RecordingError(f"{path}: no 'time' column (columns: {', '.join(cols)})")
+    t = cols.pop("time")
+    n = len(t)
+    for name, v in cols.items():
+        if ":" not in name or name.split(":", 1)[0] not in KINDS:
+            raise RecordingError(f"{path}: unknown column '{name}'; columns are time and "
+                                 f"{', '.join(k + ':<name>' for k in KINDS)}")
+        if len(v) != n:
+            raise RecordingError(f"{path}: column '{name}' has {len(v)} values, time has {n}")
+    known = {
+        "joint": [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(model.njnt)],
+        "actuator": [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(model.nu)],
+    }
+    for name in cols:
+        kind, target = name.split(":", 1)
+        what = _TARGET[kind]
+        if target not in known[what]:
+            raise RecordingError(f"{path}: column '{name}' names {what} '{target}', which the model does not have "
+                                 f"(model {what}s: {', '.join(str(k) for k in known[what])})")
+    if not any(c.startswith("qpos:") for c in cols):
+        raise RecordingError(f"{path}: no qpos:<joint> column; at least one measured position is needed")
+    missing = [a for a in known["actuator"] if f"ctrl:{a}" not in cols]
+    if missing:
+        raise RecordingError(f"{path}: missing command column(s) {', '.join('ctrl:' + a for a in missing)}")
+    # values: the first non-finite entry, by row and column
+    for name, v in [("time", t)] + list(cols.items()):
+        bad = ~np.isfinite(v)
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise RecordingError(f"{path}: non-finite value {v[row]} in column '{name}' at data row {row + 1}")
+    if n < 20:
+        raise RecordingError(f"{path}: only {n} samples; need at least 20")
+    dt = np.diff(t)
+    if (dt == 0).any():
+        row = int(np.argmax(dt == 0)) + 1
+        raise RecordingError(f"{path}: duplicated time {t[row]} at data rows {row} and {row + 1}")
+    if (dt < 0).any():
+        row = int(np.argmax(dt < 0)) + 1
+        raise RecordingError(f"{path}: time goes backwards at data row {row + 1} ({t[row]} -> {t[row + 1]})")
+    med = np.median(dt)
+    jitter = np.abs(dt - med) / med
+    if jitter.max() > 0.05:
+        row = int(np.argmax(jitter)) + 1
+        raise RecordingError(f"{path}: non-uniform sampling at data row {row + 1}: step {dt[row - 1]:.6g} s "
+                             f"vs median {med:.6g} s (resample to a fixed rate first)")
+    return Recording(path, t, cols)
+
+
+def load_all(paths, model: mujoco.MjModel, what: str = "recordings") -> list[Recording]:
+    """Load several recordings and check they share one sample rate and the same columns."""
+    if isinstance(paths, str):
+        paths = [paths]
+    if not paths:
+        raise RecordingError(f"no {what} given")
+    recs = [load(p, model) for p in paths]
+    ref = recs[0]
+    for r in recs[1:]:
+        if abs(r.dt - ref.dt) / ref.dt > 0.01:
+            raise RecordingError(f"{r.path}: sample rate {1 / r.dt:.6g} Hz differs from {ref.path} "
+                                 f"({1 / ref.dt:.6g} Hz); resample to one rate")
+        if set(r.columns) != set(ref.columns):
+            diff = sorted(set(r.columns) ^ set(ref.columns))
+            raise RecordingError(f"{r.path}: columns differ from {ref.path} ({', '.join(diff)})")
+    return recs
+
+
+def save_csv(path: str, time: np.ndarray, columns: dict[str, np.ndarray]) -> None:
+    """Write a recording as CSV (the generator and converters use this)."""
+    names = ["time"] + list(columns)
+    data = np.column_stack([time] + [columns[c] for c in columns])
+    tmp = path + ".tmp"
+    np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.9g")
+    os.replace(tmp, path)
