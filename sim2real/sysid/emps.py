@@ -21,10 +21,16 @@ def convert(mat_path: str, csv_path: str) -> str:
     for k in ("t", "qm", "qg", "vir", "gtau"):
         if k not in d:
             raise RecordingError(f"{mat_path}: variable '{k}' missing; not an EMPS file")
-    cols = {"qpos:axis": d["qm"].ravel(), "ctrl:drive": d["qg"].ravel(),
-            "force:drive": float(np.ravel(d["gtau"])[0]) * d["vir"].ravel()}
+    gtau = float(np.ravel(d["gtau"])[0])
+    vir = d["vir"].ravel().astype(float)
+    pulses = d["pulses_N"].ravel().astype(float) if "pulses_N" in d else np.zeros_like(vir)
+    # pulses_N is 0/5 and the drive voltage vir jumps by ~5.1 V in the very sample each pulse
+    # starts or ends (before the position can react): the pulses are injected into the drive's
+    # voltage, i.e. a known force gtau * pulses on the load on top of the PD loop's output.
+    # So the loop's own force is gtau * (vir - pulses) and the pulses are a known external force.
+    cols = {"qpos:axis": d["qm"].ravel(), "ctrl:drive": d["qg"].ravel(), "force:drive": gtau * (vir - pulses)}
     if "pulses_N" in d:
-        cols["qfrc:axis"] = d["pulses_N"].ravel().astype(float)
+        cols["qfrc:axis"] = gtau * pulses
     save_csv(csv_path, d["t"].ravel(), cols)
     return csv_path
 

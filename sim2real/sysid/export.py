@@ -8,6 +8,8 @@ backlash, sensor offset), is also stored as ``<custom><numeric name="sim2real:<p
 """
 from __future__ import annotations
 
+import os
+
 import mujoco
 import numpy as np
 
@@ -25,13 +27,14 @@ def write_fitted_mjcf(xml_path: str, system, z: np.ndarray, fitted: dict[str, fl
             b.inertia = [x * scale for x in b.inertia]
             b.explicitinertial = True
         elif p.kind == "dof_damping":
-            spec.joint(system.joints[p.index]).damping = [v] if np.ndim(spec.joint(system.joints[p.index]).damping) else v
+            j = spec.joint(system.joints[p.index])
+            j.damping = _set0(j.damping, v)
         elif p.kind == "viscous" and v > 0:
             j = spec.joint(system.joints[p.index])
-            j.damping = _add(j.damping, v)
+            j.damping = _set0(j.damping, _first(j.damping) + v)
         elif p.kind == "stiffness" and v > 0:
             j = spec.joint(system.joints[p.index])
-            j.stiffness = _add(j.stiffness, v)
+            j.stiffness = _set0(j.stiffness, _first(j.stiffness) + v)
         elif p.kind == "coulomb" and v > 0:
             spec.joint(system.joints[p.index]).frictionloss = v
         elif p.kind in ("actuator_gain", "actuator_kv") and v != p.default:
@@ -67,10 +70,18 @@ def write_fitted_mjcf(xml_path: str, system, z: np.ndarray, fitted: dict[str, fl
     tmp = path + ".tmp"
     with open(tmp, "w") as f:
         f.write(xml)
-    import os
-
     os.replace(tmp, path)
 
 
-def _add(current, v):
-    return (float(np.ravel(current)[0]) if np.ndim(current) else float(current)) + v
+def _first(current) -> float:
+    """MuJoCo >= 3.4 stores joint damping/stiffness as arrays (polynomial coefficients); older as floats."""
+    return float(np.ravel(current)[0])
+
+
+def _set0(current, v: float):
+    """``current`` with its first (linear) coefficient set to ``v``, in the type the spec expects."""
+    if np.ndim(current):
+        out = np.array(current, float).ravel().copy()
+        out[0] = v
+        return out
+    return float(v)

@@ -34,10 +34,11 @@ class System:
       spec: nominal + effect parameters.
       physics, effects: the MJX ``apply`` and the effects library for this model.
       joints, actuators, bodies: names.
-      nominal: names of the nominal parameters a fit may re-estimate.
+      nominal: names of the nominal parameters a fit may re-estimate (masses and declared damping;
+        actuator gains too with ``refit_gains``, for systems whose gravity load anchors the scale).
     """
 
-    def __init__(self, xml_path: str, coulomb_eps: float = 1e-3, max_delay: int = 8):
+    def __init__(self, xml_path: str, coulomb_eps: float = 1e-3, max_delay: int = 8, refit_gains: bool = False):
         if not os.path.exists(xml_path):
             raise ModelError(f"model file '{xml_path}' not found")
         try:
@@ -46,7 +47,7 @@ class System:
             raise ModelError(f"{xml_path}: cannot compile the MJCF: {e}") from None
         self.xml_path = xml_path
         for j in range(m.njnt):
-            if m.jnt_type[j] not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+            if int(m.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
                 raise ModelError(f"{xml_path}: joint '{_names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt)[j]}' is not a "
                                  "hinge or slide; the diagnosis tool handles hinge/slide joints only")
         if m.nu == 0:
@@ -69,7 +70,11 @@ class System:
         params += catalog.effect_params(m, range(m.njnt), range(m.nu), bodies)
         params += catalog.common_params(m, max_delay)
         self.spec = ParamSpec(params)
-        self.nominal = [p.name for p in params if p.kind in ("body_mass", "dof_damping", "actuator_gain", "actuator_kv")]
+        # Positions and commands alone identify forces only up to a common scale (scaling every
+        # mass, damping and gain together leaves the motion unchanged), so something must anchor
+        # the scale: the actuator gains (known from the drive's datasheet) by default.
+        kinds = ("body_mass", "dof_damping") + (("actuator_gain", "actuator_kv") if refit_gains else ())
+        self.nominal = [p.name for p in params if p.kind in kinds]
         self.physics = PhysicsModel(m, self.spec)
         self.mj = self.physics.mj
         self.effects = Effects(self.mj, self.spec, EffectsConfig(max_delay=max_delay, coulomb_eps=coulomb_eps))
