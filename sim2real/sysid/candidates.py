@@ -14,7 +14,7 @@ coulomb_friction       joint       ``coulomb`` (+ ``coulomb_asym``: different le
 viscous_damping        joint       ``viscous`` (only where the MJCF declares no damping)
 joint_stiffness        joint       ``stiffness`` (only where the MJCF declares no spring)
 sensor_offset          joint       ``sensor_offset``
-mass_offset            body        ``payload`` (at the body's ``payload_<body>`` site)
+mass_offset            body        ``payload`` (bodies with a ``payload_<body>`` site off the COM)
 action_delay           global      ``action_delay`` (grid, fractional control steps)
 motor_lag              actuator    ``motor_lag`` (grid, time constant)
 actuator_saturation    actuator    ``saturation`` (grid, force limit)
@@ -89,7 +89,11 @@ def library(system: System, dt: float, q_range: np.ndarray, force_scale: np.ndar
             out.append(Candidate("sensor_offset", jn, (f"sensor_offset:{jn}",)))
         del j
     for bn in system.bodies:
-        if "mass_offset" in effects and f"payload:{bn}" in system.spec:
+        # a payload at the body's own centre of mass is the same hypothesis as a re-fitted body
+        # mass (``none``): only bodies with a declared ``payload_<body>`` site elsewhere get one
+        i = system.bodies.index(bn)
+        if ("mass_offset" in effects and f"payload:{bn}" in system.spec and i in system.physics.payload_pos
+                and np.linalg.norm(system.physics.payload_pos[i] - system.mj.body_ipos[i]) > 1e-6):
             out.append(Candidate("mass_offset", bn, (f"payload:{bn}",)))
     max_delay = system.spec["action_delay"].high
     if "action_delay" in effects:

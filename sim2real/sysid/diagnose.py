@@ -47,6 +47,7 @@ class DiagnoseConfig:
       num_windows: time windows per recording when locating the mismatch.
       coulomb_eps: velocity scale of the smooth Coulomb model.
       min_gain: an effect must lower held-out error by this fraction to be named.
+      verify_top: how many of the best-screened effects are verified by simulation.
       plots: draw the figures of the report.
       progress: show progress while fitting candidates.
     """
@@ -63,6 +64,7 @@ class DiagnoseConfig:
     num_windows: int = 20
     coulomb_eps: float = 1e-3
     min_gain: float = 0.02
+    verify_top: int = 4
     plots: bool = True
     progress: bool = True
 
@@ -82,8 +84,9 @@ def predictions(system: System, sim: Simulator, z, rec, horizon: int, window: in
     qpos, ctrl, _, qfrc = system.arrays(rec)
     if all(rec.get("qvel", j) is not None for j in system.joints):
         qvel = np.stack([rec.get("qvel", j) for j in system.joints], -1)
-    else:
-        _, qvel, _ = smooth_derivatives(qpos, rec.dt, window)
+    else:  # the velocity *state* of the model's integrator (see derivatives.align_to_model)
+        q_s, qd_s, qdd_s = smooth_derivatives(qpos, rec.dt, window)
+        qvel = qd_s if system.rk4 else qd_s - 0.5 * float(system.mj.opt.timestep) * qdd_s
     T = len(rec)
     starts, out = sim.predict(z, qpos, qvel, ctrl, qfrc, horizon)
     H = out["qpos"].shape[1]
@@ -214,7 +217,14 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         fits.append(ident.fit(c))
         bar.step(f"fitted {c.label}")
     bar.close()
-    ordered, selected, conf, weights = rank(fits, cfg.min_gain)
+    # verify the front-runners by simulation on the held-back tail of the training recordings
+    tails = [r.slice(int(len(r) * (1 - cfg.val_fraction)), len(r)) for r in train]
+
+    def verify(fit):
+        nr, _ = score(system, sim, fit.z, tails, horizon, window)
+        return float(np.mean(list(nr.values())))
+
+    ordered, selected, conf, weights, verified = rank(fits, cfg.min_gain, verify=verify, top_k=cfg.verify_top)
     none = next(f for f in ordered if f.candidate.effect == "none")
     effect_rows = []
     for f, w in zip(ordered, weights):
@@ -222,7 +232,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                             "params": _effect_params(system, f), "std": {k: f.std.get(k) for k in _effect_params(system, f)},
                             "nominal_refit": {k: f.params[k] for k in system.nominal if k in f.params},
                             "score": f.bic - none.bic, "heldout_ratio": f.val_rmse / max(none.val_rmse, 1e-300),
-                            "heldout_rmse": f.val_rmse, "weight": float(w)})
+                            "heldout_rmse": f.val_rmse, "weight": float(w),
+                            "verified_nrmse": verified.get(f.candidate.label)})
     sel_row = next(r for r in effect_rows if r["effect"] == selected.candidate.effect
                    and r["target"] == selected.candidate.target)
     effect_rows.remove(sel_row)

@@ -6,6 +6,7 @@ The diagnosis sees only the nominal MJCF and the recordings; the benchmark
 from __future__ import annotations
 
 import dataclasses
+import functools
 import os
 
 import jax
@@ -72,23 +73,28 @@ def excitation(system: System, T: int, dt: float, rng, scale: float) -> np.ndarr
     return u
 
 
+@functools.lru_cache(maxsize=None)
+def _plant(name: str) -> tuple[System, Simulator]:
+    """One system and simulator per plant (their jitted rollout compiles once per process)."""
+    system = System(os.path.join(ASSETS, SYSTEMS[name][0]))
+    return system, Simulator(system, float(system.mj.opt.timestep))
+
+
 def record(case: Case, path: str) -> dict:
     """Simulate ``case`` and write its recording CSV; returns the true physics (spec name -> value)."""
     xml, seconds, scale = SYSTEMS[case.system]
-    system = System(os.path.join(ASSETS, xml))
-    dt = float(system.mj.opt.timestep)
+    system, sim = _plant(case.system)
+    dt = sim.dt
     T = int(seconds / dt)
     rng = np.random.default_rng(case.seed)
     truth = dict(case.nominal) | dict(case.values)
     z = system.spec.vector(truth)
     ctrl = excitation(system, T, dt, rng, scale)
-    sim = Simulator(system, dt)
     q0 = np.asarray(system.mj.qpos0, np.float32) + rng.uniform(-0.05, 0.05, system.mj.nq).astype(np.float32)
     if case.system == "cartpole":  # start hanging down, slightly off
         q0[1] = np.pi + rng.uniform(-0.1, 0.1)
     out = sim.rollout(jax.numpy.asarray(z), q0, np.zeros(system.mj.nv, np.float32), ctrl.astype(np.float32),
-                      np.zeros((T, system.mj.nv), np.float32), np.zeros((system.effects.cfg.max_delay + 2, system.mj.nu),
-                                                                        np.float32))
+                      np.zeros((T, system.mj.nv), np.float32), sim.initial_state())
     if not bool(np.all(out["ok"])):
         raise RuntimeError(f"{case.label}: the true plant diverged while recording")
     qpos = np.asarray(out["qpos"], np.float64)
@@ -96,8 +102,8 @@ def record(case: Case, path: str) -> dict:
     cols = {f"qpos:{j}": qpos[:, k] for k, j in enumerate(system.joints)}
     # the command recorded at sample k drove the step k -> k+1, which produced qpos[k]; align as
     # time[k] = state before the command: prepend the initial state, drop the last command
-    q_meas0 = np.asarray(sim._measure(jax.numpy.asarray(z), jax.numpy.asarray(q0)), np.float64)
-    q_init = q_meas0[None] + case.noise * rng.standard_normal((1, system.mj.nq))
+    # (the rollout takes its initial positions as *measured*: q0 is the first measurement)
+    q_init = np.asarray(q0, np.float64)[None] + case.noise * rng.standard_normal((1, system.mj.nq))
     for k, j in enumerate(system.joints):
         cols[f"qpos:{j}"] = np.concatenate([q_init[:, k], qpos[:-1, k]])
     for a, name in enumerate(system.actuators):

@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from sim2real.physics.model_apply import to_mjmodel
-from sim2real.sysid.derivatives import smooth_derivatives
+from sim2real.sysid.derivatives import align_to_model, smooth_derivatives
 from sim2real.sysid.system import System
 
 
@@ -46,7 +46,8 @@ class InverseDynamics:
         self.segments = []
         for rec in recordings:
             qpos, ctrl, _, qfrc = system.arrays(rec)
-            q, dq, ddq = smooth_derivatives(qpos, rec.dt, window)
+            q, dq, ddq = align_to_model(*smooth_derivatives(qpos, rec.dt, window), rec.dt,
+                                        float(system.mj.opt.timestep), system.rk4)
             keep = np.zeros(len(rec), bool)
             keep[window: len(rec) - window] = True
             self.segments.append(Segment(rec.name, rec.dt, q, dq, ddq, ctrl, qfrc, keep))

@@ -31,6 +31,7 @@ class Simulator:
         self._off = [(i, m.jnt_qposadr[p.index]) for i, p in system.spec.of_kind("sensor_offset")]
         self.rollout = jax.jit(self._rollout)
         self.segments = jax.jit(jax.vmap(self._rollout, in_axes=(None, 0, 0, 0, 0, 0)))
+        self.effect_states = jax.jit(self._effect_states)
 
     def _measure(self, z, qpos):
         for i, adr in self._off:
@@ -42,12 +43,12 @@ class Simulator:
             qpos = qpos.at[adr].add(-z[i])
         return qpos
 
-    def _rollout(self, z, q0, v0, ctrl, qfrc, past_ctrl):
+    def _rollout(self, z, q0, v0, ctrl, qfrc, es):
         """Simulate ``H`` samples from measured ``q0 [nq]``, ``v0 [nv]``.
 
         Args:
           ctrl: ``[H, nu]`` commands; qfrc: ``[H, nv]`` known external forces.
-          past_ctrl: ``[D + 2, nu]`` commands before the segment, newest first (delay/lag memory).
+          es: effect state (delay buffer, lag, backlash gap) at the segment's start.
         Returns:
           dict of ``qpos [H, nq]`` (as measured: with sensor offsets), ``qvel [H, nv]``,
           ``force [H, nu]`` (actuator force), ``ok [H]`` (finite).
@@ -56,8 +57,6 @@ class Simulator:
         model = self.sys.physics.apply(z)
         model = model.replace(opt=model.opt.replace(timestep=self.h))
         data = self.sys.data0.replace(qpos=self._true(z, q0), qvel=v0)
-        es0 = self.sys.effects.init_state()
-        es = EffectState(action_buf=past_ctrl, lag=past_ctrl[0], gap=es0.gap, gap_vel=es0.gap_vel)
 
         def step(carry, x):
             d, es = carry
@@ -70,16 +69,29 @@ class Simulator:
 
         return jax.lax.scan(step, (data, es), (ctrl, qfrc))[1]
 
-    # ------------------------------------------------------------------------------------------
-    def past(self, ctrl: np.ndarray, i: int) -> np.ndarray:
-        """Commands before sample ``i``, newest first, ``[D + 2, nu]`` (zeros before the start)."""
-        D = self.sys.effects.cfg.max_delay + 2
-        idx = i - 1 - np.arange(D)
-        out = np.where((idx >= 0)[:, None], ctrl[np.maximum(idx, 0)], 0.0)
-        return out.astype(np.float32)
+    def _effect_states(self, z, qpos, ctrl):
+        """Effect state after each recorded command ``[T, ...]``: the command path (delay line,
+        motor-lag filter, backlash gap) depends on the commands and positions only, so it is run
+        over the whole recording and every prediction segment starts from its true state."""
+        z = clip(self.sys.spec, z)
+        fx = self.sys.effects
 
-    def predict(self, z, qpos, qvel, ctrl, qfrc, horizon: int, stride: int | None = None):
+        def step(es, x):
+            u, q = x
+            _, es = fx.actuate(z, es, u, self._true(z, q), self.dt)
+            return es, es
+
+        return jax.lax.scan(step, fx.init_state(), (ctrl, qpos))[1]
+
+    def initial_state(self) -> EffectState:
+        return self.sys.effects.init_state()
+
+    # ------------------------------------------------------------------------------------------
+    def predict(self, z, qpos, qvel, ctrl, qfrc, horizon: int, stride: int | None = None, chunk: int = 32):
         """Short-horizon predictions from measured states.
+
+        Segments are simulated ``chunk`` at a time (the last chunk padded), so one compiled
+        function serves every recording of a given horizon.
 
         Returns ``(starts [S], dict of [S, H, .] arrays)``: segment ``s`` starts from the state
         at sample ``starts[s]`` and predicts samples ``starts[s] + 1 .. + H``.
@@ -88,10 +100,19 @@ class Simulator:
         horizon = int(min(horizon, T - 1))
         stride = stride or horizon
         starts = np.arange(0, T - horizon, stride)
-        q0, v0 = qpos[starts], qvel[starts]
-        u = np.stack([ctrl[s: s + horizon] for s in starts])
-        f = np.stack([qfrc[s: s + horizon] for s in starts])
-        past = np.stack([self.past(ctrl, s) for s in starts])
-        out = self.segments(jnp.asarray(z, jnp.float32), *(jnp.asarray(a, jnp.float32) for a in (q0, v0, u, f, past)))
-        return starts, jax.tree_util.tree_map(np.asarray, out)
-
+        zj = jnp.asarray(z, jnp.float32)
+        es_all = self.effect_states(zj, jnp.asarray(qpos, jnp.float32), jnp.asarray(ctrl, jnp.float32))
+        es0 = self.initial_state()
+        outs = []
+        for c0 in range(0, len(starts), chunk):
+            st = starts[c0: c0 + chunk]
+            pad = np.concatenate([st, np.full(chunk - len(st), st[0])])
+            es = jax.tree_util.tree_map(
+                lambda a, a0: jnp.where((pad > 0).reshape((-1,) + (1,) * a0.ndim), a[np.maximum(pad - 1, 0)], a0[None]),
+                es_all, es0)
+            u = np.stack([ctrl[s: s + horizon] for s in pad])
+            f = np.stack([qfrc[s: s + horizon] for s in pad])
+            out = self.segments(zj, jnp.asarray(qpos[pad], jnp.float32), jnp.asarray(qvel[pad], jnp.float32),
+                                jnp.asarray(u, jnp.float32), jnp.asarray(f, jnp.float32), es)
+            outs.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[: len(st)], out))
+        return starts, jax.tree_util.tree_map(lambda *a: np.concatenate(a), *outs)

@@ -81,6 +81,10 @@ class System:
         self.data0 = mjx.make_data(self.physics.mx)
 
     @property
+    def rk4(self) -> bool:
+        return int(self.mj.opt.integrator) == int(mujoco.mjtIntegrator.mjINT_RK4)
+
+    @property
     def nq(self) -> int:
         return int(self.mj.nq)
 

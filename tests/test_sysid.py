@@ -1,0 +1,163 @@
+"""Diagnosis tool: recording validation, concealed effects found, EMPS hardware data, atomic output."""
+import json
+import os
+import subprocess
+import sys
+
+import mujoco
+import numpy as np
+import pytest
+
+from sim2real.envs.base import ASSETS
+from sim2real.sysid import emps
+from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
+from sim2real.sysid.generator import Case, record
+from sim2real.sysid.recordings import RecordingError, load, load_all, save_csv
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PENDULUM = os.path.join(ASSETS, "pendulum.xml")
+
+
+def _model():
+    return mujoco.MjModel.from_xml_path(PENDULUM)
+
+
+def _good(n=50, dt=0.01):
+    t = np.arange(n) * dt
+    return t, {"qpos:hinge": np.sin(t), "ctrl:motor": np.cos(t)}
+
+
+def _write(tmp_path, name, header, rows):
+    p = tmp_path / name
+    p.write_text(",".join(header) + "\n" + "\n".join(",".join(str(v) for v in r) for r in rows) + "\n")
+    return str(p)
+
+
+# --------------------------------------------------------------------------------------------
+# bad input: a clear error naming file, column or row
+
+def test_good_recording_loads(tmp_path):
+    t, cols = _good()
+    p = str(tmp_path / "ok.csv")
+    save_csv(p, t, cols)
+    rec = load(p, _model())
+    assert len(rec) == 50 and rec.dt == pytest.approx(0.01)
+    np.testing.assert_allclose(rec.get("qpos", "hinge"), np.sin(t), atol=1e-8)
+
+
+@pytest.mark.parametrize("case,match", [
+    ("no_time", "no 'time' column"),
+    ("unknown_joint", "column 'qpos:elbow' names joint 'elbow'.*model joints: hinge"),
+    ("unknown_kind", "unknown column 'angle:hinge'"),
+    ("missing_ctrl", "missing command column.*ctrl:motor"),
+    ("nan_row", "non-finite value nan in column 'qpos:hinge' at data row 7"),
+    ("duplicated_time", "duplicated time .* at data rows 10 and 11"),
+    ("backwards_time", "time goes backwards at data row 21"),
+    ("ragged", "malformed CSV"),
+])
+def test_bad_recordings_name_the_problem(tmp_path, case, match):
+    t, cols = _good()
+    header = ["time", "qpos:hinge", "ctrl:motor"]
+    rows = [[t[i], cols["qpos:hinge"][i], cols["ctrl:motor"][i]] for i in range(len(t))]
+    if case == "no_time":
+        header[0] = "t"
+    elif case == "unknown_joint":
+        header[1] = "qpos:elbow"
+    elif case == "unknown_kind":
+        header[1] = "angle:hinge"
+    elif case == "missing_ctrl":
+        header, rows = header[:2], [r[:2] for r in rows]
+    elif case == "nan_row":
+        rows[6][1] = "nan"
+    elif case == "duplicated_time":
+        rows[10][0] = rows[9][0]
+    elif case == "backwards_time":
+        rows[20][0] = rows[18][0] - 0.001
+    elif case == "ragged":
+        rows[3] = rows[3][:2]
+    p = _write(tmp_path, f"{case}.csv", header, rows)
+    with pytest.raises(RecordingError, match=match) as e:
+        load(p, _model())
+    assert p in str(e.value)
+
+
+def test_different_sample_rates_rejected(tmp_path):
+    a, b = str(tmp_path / "a.csv"), str(tmp_path / "b.csv")
+    save_csv(a, *_good(dt=0.01))
+    save_csv(b, *_good(dt=0.02))
+    with pytest.raises(RecordingError, match="b.csv: sample rate 50 Hz differs"):
+        load_all([a, b], _model())
+
+
+def test_cli_bad_input_exits_nonzero_and_writes_nothing(tmp_path):
+    t, cols = _good()
+    cols["qpos:hinge"][5] = np.nan
+    bad = str(tmp_path / "bad.csv")
+    save_csv(bad, t, cols)
+    out = tmp_path / "diag"
+    r = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "diagnose.py"), f"model={PENDULUM}",
+                        f"recordings=[{bad}]", f"out={out}"], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode != 0
+    assert "bad.csv" in r.stderr and "qpos:hinge" in r.stderr and "row 6" in r.stderr
+    assert not out.exists()
+    assert not [p for p in os.listdir(tmp_path) if p.startswith(".diagnosis-")]
+
+
+def test_model_joints_must_match(tmp_path):
+    """A recording of another system (no column for the model's joint) is refused by name."""
+    arm = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, "arm2.xml"))
+    t, cols = _good()
+    p = str(tmp_path / "pend.csv")
+    save_csv(p, t, cols)
+    with pytest.raises(RecordingError, match="names joint 'hinge'.*model joints: shoulder, elbow"):
+        load(p, arm)
+
+
+# --------------------------------------------------------------------------------------------
+# concealed effects: the diagnosis sees only the nominal model and the recordings
+
+def _diagnose_case(tmp_path, case):
+    train, held = str(tmp_path / "train.csv"), str(tmp_path / "held.csv")
+    record(case, train)
+    record(Case(case.system, case.effect, case.target, case.values, case.nominal, case.noise, case.seed + 1000), held)
+    return diagnose(DiagnoseConfig(model=PENDULUM, recordings=(train,), heldout=(held,), out=str(tmp_path / "d"),
+                                   plots=False, progress=False,
+                                   effects=("none", "coulomb_friction", "viscous_damping", "action_delay")))
+
+
+def test_concealed_coulomb_friction_found_and_fitted(tmp_path):
+    d = _diagnose_case(tmp_path, Case("pendulum", "coulomb_friction", "hinge", (("coulomb:hinge", 0.15),), seed=0))
+    sel = d["effects"][0]
+    assert (sel["effect"], sel["target"]) == ("coulomb_friction", "hinge")
+    assert sel["params"]["coulomb:hinge"] == pytest.approx(0.15, rel=0.1)
+    assert d["fit"]["after"] < 0.7 * d["fit"]["before"]
+    with open(tmp_path / "d" / "diagnosis.json") as f:
+        assert json.load(f)["effects"][0]["effect"] == "coulomb_friction"
+
+
+def test_parameter_only_mismatch_names_no_effect(tmp_path):
+    d = _diagnose_case(tmp_path, Case("pendulum", "none", "", (), (("mass:pole", 1.3),), seed=100))
+    assert d["effects"][0]["effect"] == "none"
+    assert d["fitted_params"]["mass:pole"] == pytest.approx(1.3, rel=0.05)
+
+
+# --------------------------------------------------------------------------------------------
+# real hardware: the bundled EMPS data (the demo)
+
+def test_emps_hardware_diagnosis(tmp_path):
+    recs = emps.recordings(str(tmp_path / "recs"))
+    out = tmp_path / "emps"
+    d = diagnose(DiagnoseConfig(model=emps.NOMINAL_XML, recordings=(recs["estimation"],),
+                                heldout=(recs["validation"],), out=str(out), progress=False))
+    sel = d["effects"][0]
+    assert (sel["effect"], sel["target"]) == ("coulomb_friction", "axis")
+    fc = sel["params"]["coulomb:axis"]
+    assert abs(fc - emps.REFERENCE["Fc"]) < 0.15 * emps.REFERENCE["Fc"]
+    offset = fc * sel["params"]["coulomb_asym:axis"]  # the constant force offset during motion
+    assert offset == pytest.approx(emps.REFERENCE["offset"], rel=0.3)
+    assert d["fit"]["reduction"] >= 0.3
+    for f in ("diagnosis.json", "report.md", "fitted.xml", "overlay.png"):
+        assert (out / f).exists(), f
+    fitted = mujoco.MjModel.from_xml_path(str(out / "fitted.xml"))
+    assert fitted.dof_frictionloss[0] == pytest.approx(fc, rel=1e-4)
+    assert fitted.body_mass[1] == pytest.approx(d["fitted_params"]["mass:carriage"], rel=1e-4)
