@@ -80,6 +80,26 @@ class TrainConfig:
         return -(-self.num_updates // self.updates_per_chunk)
 
 
+def make_chunk(algo, updates: int):
+    """``jit(chunk)(state [S, ...], first_update) -> (state, metrics [S, K, ...])``.
+
+    The scan over updates is outside the vmap over seeds so that the update index stays an
+    unbatched scalar: algorithms that do something only every n-th update (LSDR's distribution
+    step) branch on it with a real ``lax.cond`` (under vmap a batched predicate turns ``cond``
+    into a ``select`` that runs both branches at every update).
+    """
+    takes_index = getattr(algo, "takes_update_index", False)
+
+    def body(c, i):
+        return jax.vmap(lambda s: algo.update(s, i) if takes_index else algo.update(s))(c)
+
+    def chunk(state, first):
+        state, metrics = jax.lax.scan(body, state, first + jnp.arange(updates))
+        return state, jax.tree_util.tree_map(lambda x: jnp.swapaxes(x, 0, 1), metrics)
+
+    return jax.jit(chunk)
+
+
 def build_algo(cfg: TrainConfig, env):
     from sim2real.algos import registry
 
@@ -120,8 +140,7 @@ def train(cfg: TrainConfig) -> dict:
     # created under jit, so the state's arrays have exactly the layout chunk outputs have
     # (an eagerly built state costs a second compilation of the chunk on CPU)
     init = jax.jit(jax.vmap(algo.init))
-    chunk = jax.jit(jax.vmap(lambda s: jax.lax.scan(lambda c, _: algo.update(c), s, None,
-                                                    length=cfg.updates_per_chunk)))
+    chunk = make_chunk(algo, cfg.updates_per_chunk)
     state = init(seeds)
     mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints)
     start = 0
@@ -140,7 +159,7 @@ def train(cfg: TrainConfig) -> dict:
     try:
         for c in range(start, end):
             t0 = time.perf_counter()
-            state, metrics = chunk(state)
+            state, metrics = chunk(state, c * cfg.updates_per_chunk)
             metrics = jax.tree_util.tree_map(np.asarray, metrics)  # [S, K] per metric
             dt = time.perf_counter() - t0
             logger.write(c, metrics, dt)

@@ -22,15 +22,21 @@ def smooth_derivatives(x: np.ndarray, dt: float, window: int, order: int = 3):
 def align_to_model(q, dq, ddq, dt: float, timestep: float, rk4: bool):
     """Smoothed (central) derivatives -> the states and accelerations a discrete model step sees.
 
-    The command recorded at sample ``k`` is held over ``[t_k, t_k + dt]``. For MuJoCo's
-    semi-implicit Euler (and implicit) integrators, with physics step ``h``, the velocity
-    *state* at sample ``k`` lags the central difference by ``h/2 * ddq`` and the acceleration
-    that command ``k`` causes is the central second difference at ``k + 1``; without this the
-    equation error pairs each command with the previous step's acceleration (a spurious
-    one-sample delay). For RK4 (continuous time) the step is evaluated at the midpoint.
+    The command recorded at sample ``k`` is held over ``[t_k, t_k + dt]``. With MuJoCo's
+    semi-implicit Euler at ``n = dt / h`` physics steps per sample, the central second
+    difference at ``k`` is ``(1 - w) a_{k-1} + w a_k`` with ``w = (n + 1) / 2n`` (exactly the
+    acceleration of command ``k`` for ``n = 1``; the midpoint mix of continuous time as
+    ``n`` grows, and for RK4), so the signals are read ``s = 1 - w`` samples later; and the
+    velocity *state* lags the central difference by ``h/2 * ddq``. Without this, predictions
+    from measured states start from a biased velocity, and the equation error pairs each
+    command with a blend of the neighbouring steps' accelerations.
     All arrays ``[T, n]``; returns ``(q, dq, ddq)`` of the same shapes (last row repeated).
     """
+    n = max(1, int(round(dt / timestep)))
+    s = 0.5 if rk4 else (n - 1) / (2 * n)
     nxt = lambda x: np.concatenate([x[1:], x[-1:]])  # noqa: E731
-    if rk4:
-        return 0.5 * (q + nxt(q)), 0.5 * (dq + nxt(dq)), 0.5 * (ddq + nxt(ddq))
-    return q, dq - 0.5 * timestep * ddq, nxt(ddq)
+    shift = lambda x: x if s == 0 else (1 - s) * x + s * nxt(x)  # noqa: E731
+    q, dq, ddq = shift(q), shift(dq), shift(ddq)
+    if not rk4:
+        dq = dq - 0.5 * timestep * ddq
+    return q, dq, ddq

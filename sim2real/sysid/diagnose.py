@@ -23,7 +23,7 @@ from sim2real.sysid import locate, report
 from sim2real.sysid.candidates import EFFECTS, library
 from sim2real.sysid.derivatives import smooth_derivatives, window_for
 from sim2real.sysid.export import write_fitted_mjcf
-from sim2real.sysid.identify import Identifier, rank
+from sim2real.sysid.identify import Identifier, rank, refine_by_simulation
 from sim2real.sysid.invdyn import InverseDynamics
 from sim2real.sysid.recordings import RecordingError, load_all
 from sim2real.sysid.simulate import Simulator
@@ -48,6 +48,7 @@ class DiagnoseConfig:
       coulomb_eps: velocity scale of the smooth Coulomb model.
       min_gain: an effect must lower held-out error by this fraction to be named.
       verify_top: how many of the best-screened effects are verified by simulation.
+      refine_evals: simulations spent refining each close contender (0: no refinement).
       plots: draw the figures of the report.
       progress: show progress while fitting candidates.
     """
@@ -65,6 +66,7 @@ class DiagnoseConfig:
     coulomb_eps: float = 1e-3
     min_gain: float = 0.02
     verify_top: int = 4
+    refine_evals: int = 80
     plots: bool = True
     progress: bool = True
 
@@ -224,7 +226,11 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         nr, _ = score(system, sim, fit.z, tails, horizon, window)
         return float(np.mean(list(nr.values())))
 
-    ordered, selected, conf, weights, verified = rank(fits, cfg.min_gain, verify=verify, top_k=cfg.verify_top)
+    def refine(fit, err):
+        return refine_by_simulation(fit, system.spec, verify, err, cfg.refine_evals)
+
+    ordered, selected, conf, weights, verified = rank(fits, cfg.min_gain, verify=verify, top_k=cfg.verify_top,
+                                                      refine=refine if cfg.refine_evals > 0 else None)
     none = next(f for f in ordered if f.candidate.effect == "none")
     effect_rows = []
     for f, w in zip(ordered, weights):

@@ -46,6 +46,7 @@ class Fit:
     train_rmse: float
     val_rmse: float
     bic: float
+    alternatives: list = dataclasses.field(default_factory=list)
 
 
 def _step_for(spec, name: str) -> float:
@@ -87,6 +88,17 @@ class Identifier:
         # joint's typical speed; every candidate is fitted and scored on the same elements.
         v_min = 0.02 * np.percentile(np.abs(self.dq), 95, axis=0)
         self.use = np.abs(self.dq) >= v_min
+        # Rows where a limited joint is at (or within 2% of its range from) a limit are left
+        # out too: the limit's contact force is not a missing effect, and its soft-constraint
+        # force is ill-determined from smoothed accelerations around an impact.
+        m = idyn.sys.mj
+        q = idyn.stacked("q")
+        for j in range(m.njnt):
+            if m.jnt_limited[j]:
+                lo, hi = m.jnt_range[j]
+                margin = 0.02 * (hi - lo)
+                near = (q[:, m.jnt_qposadr[j]] < lo + margin) | (q[:, m.jnt_qposadr[j]] > hi - margin)
+                self.use[near, :] = False
         self.cols = {}          # spec name -> full-residual regressor [n, nv]
         self.act_cols = {}      # spec name -> actuator-part regressor (re-computed under grid values)
         for name in self.nominal:
@@ -143,16 +155,19 @@ class Identifier:
         """Fit one candidate (grid search over its nonlinear parameter if it has one)."""
         if cand.grid_param is None:
             return self._fit_at(cand, self.z0, self.r0)
-        best = None
         i = self.spec.index(cand.grid_param)
+        fits = []
         for g in cand.grid:
             z = self.z0.copy()
             z[i] = g
             # the grid parameter acts on the actuator path: the dynamics part is unchanged
             r = self._act_residual(z) + self._dyn_residual()
-            f = self._fit_at(cand, z, r, regrid=True)
-            if best is None or f.train_rmse < best.train_rmse:
-                best = f
+            fits.append(self._fit_at(cand, z, r, regrid=True))
+        k = int(np.argmin([f.train_rmse for f in fits]))
+        best = fits[k]
+        # the grid neighbours of the equation-error optimum, for verification by simulation
+        # (smoothing blurs command steps, which biases the equation error by a grid step or so)
+        best.alternatives = [fits[j] for j in (k - 1, k + 1) if 0 <= j < len(fits)]
         return best
 
     def _dyn_residual(self):
@@ -235,7 +250,8 @@ class Identifier:
         zf[self.spec.index(f"coulomb:{j}")] = fc
 
 
-def rank(fits: list[Fit], min_gain: float = 0.02, min_bic_drop: float = 10.0, verify=None, top_k: int = 4):
+def rank(fits: list[Fit], min_gain: float = 0.02, min_bic_drop: float = 10.0, verify=None, top_k: int = 4,
+         refine=None):
     """Order fits by BIC, then decide the selected one (``none`` unless an effect clearly wins).
 
     Screening by BIC on the equation error is cheap but noise-limited (it differentiates twice);
@@ -243,6 +259,8 @@ def rank(fits: list[Fit], min_gain: float = 0.02, min_bic_drop: float = 10.0, ve
     predictions on held-back data, lower is better) and the best verified one is selected. An
     effect is named only if it beats ``none`` by ``min_bic_drop`` in BIC *and* by ``min_gain``
     (relative) in the verified error.
+
+    ``refine(fit, err) -> (fit, err)`` (optional) improves a close contender by simulation.
 
     Returns ``(ordered fits, selected fit, confidence, weights, verified {label: error})``; the
     confidence is the BIC weight of the selection among all candidates, times its share of the
@@ -266,8 +284,32 @@ def rank(fits: list[Fit], min_gain: float = 0.02, min_bic_drop: float = 10.0, ve
         selected = eligible[0] if eligible else none
         conf = float(w[uniq.index(selected)])
         return uniq, selected, conf, w, verified
-    pool = eligible[:top_k]
-    verified = {f.candidate.label: float(verify(f)) for f in pool + [none]}
+    pool, verified = [], {}
+    for f in eligible[:top_k] + [none]:
+        tried = [(float(verify(g)), g) for g in [f] + list(f.alternatives)]
+        err, g = min(tried, key=lambda t: t[0])
+        verified[f.candidate.label] = err
+        if g is not f:  # a grid neighbour predicts better: it replaces the screened fit
+            i = uniq.index(f)
+            uniq[i] = g
+        if f is not none:
+            pool.append(g)
+    if refine is not None and pool:
+        # close contenders (within 2x of the best verified error) are refined by simulation
+        # (output error), which removes the equation error's smoothing bias from all of them
+        lead = min(verified.values())
+        close = [f for f in pool + [none] if verified[f.candidate.label] <= 2.0 * lead]
+        for k, f in enumerate(pool + [none] if len(close) > 1 else []):
+            lab = f.candidate.label
+            if verified[lab] <= 2.0 * lead:
+                g, err = refine(f, verified[lab])
+                if err < verified[lab]:
+                    verified[lab] = err
+                    uniq[[u.candidate.label for u in uniq].index(lab)] = g
+                    if k < len(pool):
+                        pool[k] = g
+                    else:
+                        none = g
     best = min(pool, key=lambda f: verified[f.candidate.label], default=None)
     if best is not None and verified[best.candidate.label] < (1 - min_gain) * verified[none.candidate.label]:
         selected = best
@@ -278,3 +320,45 @@ def rank(fits: list[Fit], min_gain: float = 0.02, min_bic_drop: float = 10.0, ve
     share = share / share.sum()
     conf = float(share[list(verified).index(selected.candidate.label)])
     return uniq, selected, conf, w, verified
+
+
+def refine_by_simulation(fit: Fit, spec, verify, err0: float, max_evals: int = 80) -> tuple[Fit, float]:
+    """Nelder-Mead on ``verify`` (simulated prediction error) over the fit's parameters.
+
+    Parameters are scaled by their fitted magnitude (relative steps of 10%; additive steps for
+    those fitted at zero); the grid parameter of delay / lag / saturation / backlash is freed
+    too. Returns the better of the refined and the given fit, with its error.
+    """
+    from scipy.optimize import minimize
+
+    names = [n for n in fit.params if n in spec]
+    if not names:
+        return fit, err0
+    idx = np.array([spec.index(n) for n in names])
+    x0 = np.asarray(fit.z, np.float64)[idx]
+    scale = np.where(np.abs(x0) > 1e-9, np.abs(x0), 0.01 * (spec.high[idx] - spec.low[idx]))
+    lo, hi = spec.low[idx], spec.high[idx]
+    cache = {}
+
+    def z_of(u):
+        z = np.array(fit.z, np.float32)
+        z[idx] = np.clip(x0 + u * scale, lo, hi)
+        return z
+
+    def f(u):
+        key = tuple(np.round(u, 6))
+        if key not in cache:
+            zz = z_of(u)
+            cache[key] = float(verify(dataclasses.replace(fit, z=zz)))
+        return cache[key]
+
+    simplex = np.vstack([np.zeros(len(idx)), 0.1 * np.eye(len(idx))])
+    res = minimize(f, np.zeros(len(idx)), method="Nelder-Mead",
+                   options={"initial_simplex": simplex, "maxfev": max_evals, "xatol": 1e-3, "fatol": 1e-4 * err0})
+    if res.fun >= err0:
+        return fit, err0
+    z = z_of(res.x)
+    params = dict(fit.params)
+    for n, i in zip(names, idx):
+        params[n] = float(z[i])
+    return dataclasses.replace(fit, z=z, params=params, alternatives=[]), float(res.fun)

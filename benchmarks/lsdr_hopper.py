@@ -1,0 +1,319 @@
+"""LSDR on hopper (seed 000), scaled to the device budget: learned ranges, evolution heat maps,
+the Gaussian run, learned vs fixed DR at test time, EPOpt with learned vs uniform DR.
+
+    python benchmarks/lsdr_hopper.py --part ranges     # Table I + Fig. 4: one run per parameter
+    python benchmarks/lsdr_hopper.py --part gaussian   # Fig. 1d / 6: 4-D full-covariance Gaussian
+    python benchmarks/lsdr_hopper.py --part transfer   # Fig. 8: LSDR vs fixed DR, fine-tuned on the test range
+    python benchmarks/lsdr_hopper.py --part epopt      # Fig. 9: EPOpt-PPO with learned vs uniform DR
+    python benchmarks/lsdr_hopper.py --part plots      # figures from the saved results (CPU)
+    ... --scale 0.02                                   # tiny budgets, to check the script on CPU
+
+Each part writes ``benchmarks/results/lsdr_hopper/<part>.npz`` / ``.csv`` (and ``--part plots``
+the PNGs). Every run trains ``--seeds`` seeds in one ``jit(vmap(scan))`` through the same
+algorithm objects as ``scripts/train.py``. Priors are the paper's Table I boxes; values below a
+parameter's physical lower bound (negative sizes, friction, damping) are clipped to it in the
+simulator (README, bounds rule), as the paper's simulator did implicitly.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = os.path.join(HERE, "results", "lsdr_hopper")
+# Table I (hopper): initial train/test box and the paper's converged range
+TABLE_I = {
+    "torso_size": ((-0.1, 0.2), (0.0015, 0.09)),
+    "density": ((10.0, 5000.0), (400.0, 4000.0)),
+    "friction": ((-3.0, 10.0), (-3.0, 3.0)),
+    "joint_damping": ((-10.0, 30.0), (-1.0, 26.0)),
+}
+BASE = [  # GPU scale: 4096 envs x 16 steps per PPO update
+    "env=hopper", "ppo.num_envs=4096", "ppo.num_steps=16", "ppo.num_epochs=4", "ppo.num_minibatches=8",
+    "ppo.gamma=0.99", "ppo.lr=3e-4", "ppo.reward_scale=0.1", "ppo.net.hidden=[128,128]", "ppo.net.activation=tanh",
+    "ppo.net.use_context=true", "tensorboard=false", "progress=false",
+]
+
+
+def config(extra: list[str], steps: float, scale: float, seeds: int):
+    from sim2real import config as config_lib
+    from sim2real.train import TrainConfig
+
+    args = BASE + [f"total_steps={int(steps * scale)}", f"num_seeds={seeds}"] + extra
+    if scale < 1:  # CPU check of the script
+        args += ["ppo.num_envs=64", "ppo.num_steps=16", "algo_options.num_contexts=8", "algo_options.eval_horizon=50"]
+    return config_lib.load(TrainConfig, args)
+
+
+def run(cfg, chunks_between_evals: int = 0, evaluate=None, state=None, log=print):
+    """Train ``cfg``; returns (state, history rows, probs [C, S, D, bins] or None, algo, env)."""
+    import jax
+
+    from sim2real.envs import make
+    from sim2real.train import build_algo, make_chunk
+
+    env = make(cfg.env, **cfg.env_options)
+    algo = build_algo(cfg, env)
+    seeds = jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds)
+    fresh = jax.jit(jax.vmap(algo.init))(seeds)
+    if state is not None:  # fine-tuning: trained policy, fresh optimiser and learning-rate schedule
+        ppo = fresh.ppo.replace(params=state.ppo.params, obs_stats=state.ppo.obs_stats)
+        state = fresh.replace(ppo=ppo)
+    else:
+        state = fresh
+    chunk = make_chunk(algo, cfg.updates_per_chunk)
+    rows, probs, dists = [], [], []
+    t0 = time.time()
+    for c in range(cfg.num_chunks):
+        if evaluate is not None and chunks_between_evals and c % chunks_between_evals == 0:
+            rows.append({"chunk": c, "env_steps": c * cfg.updates_per_chunk * cfg.ppo.batch_size,
+                         **evaluate(algo, env, state)})
+        state, m = chunk(state, c * cfg.updates_per_chunk)
+        m = jax.tree_util.tree_map(np.asarray, m)
+        row = {"chunk": c + 1, "env_steps": (c + 1) * cfg.updates_per_chunk * cfg.ppo.batch_size,
+               "wall_seconds": round(time.time() - t0, 2),
+               "train_return": float(np.nanmean(np.where(m["episodes"] > 0, m["episode_return"], np.nan))),
+               "dist_entropy": float(np.nanmean(m["dist_entropy"])) if "dist_entropy" in m else np.nan,
+               "dist_eval_return": float(np.nanmean(m["dist_eval_return"])) if "dist_eval_return" in m else np.nan}
+        if "dist_probs" in m:
+            probs.append(m["dist_probs"][:, -1])  # [S, D, bins] at the chunk's end
+        if "dist_mean" in m:
+            dists.append((m["dist_mean"][:, -1], m["dist_cov"][:, -1]))
+        if evaluate is not None and chunks_between_evals and c == cfg.num_chunks - 1:
+            row.update(evaluate(algo, env, state))
+        rows.append(row)
+        log(f"  chunk {c + 1}/{cfg.num_chunks}: {row['env_steps']:,} steps, train return "
+            f"{row['train_return']:.0f}, {row['wall_seconds']:.0f} s")
+    return state, rows, (np.stack(probs) if probs else None), dists, algo, env
+
+
+def test_evaluator(names, grid, fixed_base_overrides=None, episodes_per=1):
+    """``evaluate(algo, env, state) -> {'test_return': mean over grid and seeds, 'test_grid': [S, N]}``."""
+    import jax
+    import jax.numpy as jnp
+
+    from sim2real.evaluate import episodes
+
+    cache = {}
+
+    def evaluate(algo, env, state):
+        if "f" not in cache:
+            idx = env.spec.indices(names)
+            base = jnp.asarray(env.default_z())
+            zs = jnp.stack([base.at[idx].set(jnp.asarray(g, jnp.float32)) for g in grid])
+            zs = jnp.asarray(np.asarray(jax.vmap(lambda z: jnp.clip(z, env.spec.low, env.spec.high))(zs)))
+
+            def one(st):
+                params, stats = algo.policy(st)
+                return episodes(env, algo.ppo, params, stats, zs, jax.random.PRNGKey(7), episodes_per)["return"].mean(-1)
+
+            cache["f"] = jax.jit(jax.vmap(one))
+        r = np.asarray(cache["f"](state))  # [S, N]
+        return {"test_return": float(r.mean()), "test_grid": r.tolist()}
+
+    return evaluate
+
+
+def uniform_fit(centers, p):
+    """Moment-matched uniform range of a binned distribution: mean +- sqrt(3) std."""
+    m = float((centers * p).sum())
+    s = float(np.sqrt(((centers - m) ** 2 * p).sum()))
+    return m - np.sqrt(3) * s, m + np.sqrt(3) * s
+
+
+def write_csv(path, rows):
+    keys = list(dict.fromkeys(k for r in rows for k in r if k != "test_grid"))
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, keys, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def part_ranges(a, log):
+    """One LSDR run per parameter, 100-bin distribution over the Table I box."""
+    summary = {}
+    for name, (prior, conv) in TABLE_I.items():
+        if a.only and a.only != name:
+            continue
+        log(f"LSDR binned, {name} over {prior}")
+        cfg = config([f"name=lsdr_{name}", "algo=lsdr", f"dr.params=[{name}]", f"dr.low=[{prior[0]}]",
+                      f"dr.high=[{prior[1]}]", "algo_options.dist=binned", "algo_options.num_bins=100",
+                      f"algo_options.num_contexts={a.contexts}", f"algo_options.dist_every={a.dist_every}",
+                      f"algo_options.dist_start={a.dist_start}", f"updates_per_chunk={a.chunk}"],
+                     a.steps, a.scale, a.seeds)
+        _, rows, probs, _, _, _ = run(cfg, log=log)
+        edges = np.linspace(prior[0], prior[1], probs.shape[-1] + 1)
+        centers = (edges[1:] + edges[:-1]) / 2
+        fits = [uniform_fit(centers, probs[-1, s, 0]) for s in range(probs.shape[1])]
+        summary[name] = {"prior": prior, "paper_converged": conv, "learned_per_seed": fits,
+                         "learned_mean": np.mean(fits, 0).tolist(), "learned_std": np.std(fits, 0).tolist(),
+                         "final_train_return": rows[-1]["train_return"], "env_steps": rows[-1]["env_steps"],
+                         "wall_seconds": rows[-1]["wall_seconds"]}
+        np.savez(os.path.join(a.out, f"ranges_{name}.npz"), probs=probs, edges=edges,
+                 env_steps=np.array([r["env_steps"] for r in rows]))
+        write_csv(os.path.join(a.out, f"ranges_{name}.csv"), rows)
+        log(f"  learned range {summary[name]['learned_mean']} (paper {conv})")
+    path = os.path.join(a.out, "ranges_summary.json")
+    old = json.load(open(path)) if os.path.exists(path) else {}
+    old.update(summary)
+    with open(path, "w") as f:
+        json.dump(old, f, indent=2)
+
+
+def part_gaussian(a, log):
+    names = list(TABLE_I)
+    lo = [TABLE_I[n][0][0] for n in names]
+    hi = [TABLE_I[n][0][1] for n in names]
+    log("LSDR full-covariance Gaussian over the 4-D Table I box")
+    cfg = config(["name=lsdr_gauss", "algo=lsdr", f"dr.params=[{','.join(names)}]", f"dr.low={lo}", f"dr.high={hi}",
+                  "algo_options.dist=gaussian", f"algo_options.num_contexts={a.contexts}",
+                  f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
+                  f"updates_per_chunk={a.chunk}"], a.steps, a.scale, a.seeds)
+    _, rows, _, dists, _, _ = run(cfg, log=log)
+    np.savez(os.path.join(a.out, "gaussian.npz"), names=np.array(names), low=np.array(lo), high=np.array(hi),
+             mean=np.stack([d[0] for d in dists]), cov=np.stack([d[1] for d in dists]),
+             env_steps=np.array([r["env_steps"] for r in rows]))
+    write_csv(os.path.join(a.out, "gaussian.csv"), rows)
+
+
+def part_transfer(a, log, optimizer="ppo"):
+    """Learned vs fixed DR on torso size; then both fine-tuned on the full test range (Fig. 8)."""
+    prior = TABLE_I["torso_size"][0]
+    grid = [[g] for g in np.linspace(prior[0], prior[1], 16)]
+    evaluate = test_evaluator(["torso_size"], grid)
+    tag = "transfer" if optimizer == "ppo" else "epopt"
+    result = {}
+    extra_opt = [] if optimizer == "ppo" else ["algo_options.policy_optimizer=epopt",
+                                               f"algo_options.epopt.num_contexts={a.epopt_contexts}"]
+    for algo in ("lsdr", "fixed_dr"):
+        log(f"{algo} ({optimizer}) on torso size over {prior}")
+        cfg = config([f"name={tag}_{algo}", f"algo={algo}", "dr.params=[torso_size]", f"dr.low=[{prior[0]}]",
+                      f"dr.high=[{prior[1]}]", "algo_options.dist=binned", f"algo_options.num_contexts={a.contexts}",
+                      f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
+                      f"updates_per_chunk={a.chunk}"] + extra_opt, a.steps, a.scale, a.seeds)
+        st, rows, probs, _, _, _ = run(cfg, a.eval_every, evaluate, log=log)
+        result[algo] = {"train": rows}
+        if optimizer == "ppo":
+            log(f"  fine-tuning {algo} on the test range (fixed uniform DR over it)")
+            ft = config([f"name={tag}_{algo}_ft", "algo=fixed_dr", "dr.params=[torso_size]", f"dr.low=[{prior[0]}]",
+                         f"dr.high=[{prior[1]}]", f"updates_per_chunk={a.chunk}"], a.ft_steps, a.scale, a.seeds)
+            _, ft_rows, _, _, _, _ = run(ft, a.eval_every, evaluate, state=st, log=log)
+            result[algo]["finetune"] = ft_rows
+        if probs is not None:
+            np.savez(os.path.join(a.out, f"{tag}_{algo}_probs.npz"), probs=probs)
+    result["grid"] = grid
+    with open(os.path.join(a.out, f"{tag}.json"), "w") as f:
+        json.dump(result, f)
+
+
+def part_plots(a, log):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [n for n in TABLE_I if os.path.exists(os.path.join(a.out, f"ranges_{n}.npz"))]
+    if names:  # Fig. 4: evolution of p_phi per parameter (seed 0)
+        fig, axes = plt.subplots(1, len(names), figsize=(4 * len(names), 3.4), squeeze=False)
+        for ax, n in zip(axes[0], names):
+            d = np.load(os.path.join(a.out, f"ranges_{n}.npz"))
+            p = d["probs"][:, 0, 0]  # [C, bins]
+            ax.imshow(p.T, origin="lower", aspect="auto", cmap="magma",
+                      extent=[0, d["env_steps"][-1] / 1e6, d["edges"][0], d["edges"][-1]])
+            conv = TABLE_I[n][1]
+            for v in conv:
+                ax.axhline(v, color="c", ls="--", lw=1)
+            ax.set_title(f"{n} (dashed: paper's range)")
+            ax.set_xlabel("env steps [M]")
+        fig.tight_layout()
+        fig.savefig(os.path.join(a.out, "evolution.png"), dpi=110)
+    gp = os.path.join(a.out, "gaussian.npz")
+    if os.path.exists(gp):  # Fig. 1d / 6: Gaussian marginals over time and final 2-sigma ellipses
+        d = np.load(gp)
+        names_g, mean, cov = list(d["names"]), d["mean"][:, 0], d["cov"][:, 0]
+        fig, axes = plt.subplots(1, len(names_g) + 1, figsize=(4 * (len(names_g) + 1), 3.4))
+        x = d["env_steps"] / 1e6
+        for k, (ax, n) in enumerate(zip(axes, names_g)):
+            sd = np.sqrt(cov[:, k, k])
+            ax.plot(x, mean[:, k], "k")
+            ax.fill_between(x, mean[:, k] - 2 * sd, mean[:, k] + 2 * sd, alpha=0.3)
+            ax.axhspan(d["low"][k], d["high"][k], color="0.9", zorder=-1)
+            ax.set_title(f"{n}: mean +- 2 sd")
+            ax.set_xlabel("env steps [M]")
+        ax = axes[-1]
+        i, j = 0, 2  # torso size vs friction
+        for t, col in ((0, "0.6"), (len(mean) - 1, "C3")):
+            c = cov[t][np.ix_([i, j], [i, j])]
+            w, v = np.linalg.eigh(c)
+            th = np.linspace(0, 2 * np.pi, 100)
+            e = (v @ (2 * np.sqrt(np.maximum(w, 0))[:, None] * np.stack([np.cos(th), np.sin(th)])))
+            ax.plot(mean[t, i] + e[0], mean[t, j] + e[1], color=col, label="start" if t == 0 else "end")
+        ax.set_xlabel(names_g[i])
+        ax.set_ylabel(names_g[j])
+        ax.set_title("2-sd confidence region")
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(os.path.join(a.out, "gaussian.png"), dpi=110)
+    for tag, title in (("transfer", "torso size: test-range return (Fig. 8)"), ("epopt", "EPOpt, torso size (Fig. 9)")):
+        p = os.path.join(a.out, f"{tag}.json")
+        if not os.path.exists(p):
+            continue
+        d = json.load(open(p))
+        fig, ax = plt.subplots(figsize=(6, 3.6))
+        for algo, col in (("lsdr", "C3"), ("fixed_dr", "C0")):
+            rows = [r for r in d[algo]["train"] if "test_grid" in r]
+            x = np.array([r["env_steps"] for r in rows]) / 1e6
+            g = np.array([np.mean(r["test_grid"], 1) for r in rows])  # [E, S] mean over the grid
+            ax.plot(x, g.mean(1), color=col, label=f"{algo} (training)")
+            ax.fill_between(x, g.min(1), g.max(1), color=col, alpha=0.2)
+            if "finetune" in d[algo]:
+                f_rows = [r for r in d[algo]["finetune"] if "test_grid" in r]
+                xf = x[-1] + np.array([r["env_steps"] for r in f_rows]) / 1e6
+                gf = np.array([np.mean(r["test_grid"], 1) for r in f_rows])
+                ax.plot(xf, gf.mean(1), color=col, ls="--", label=f"{algo} (fine-tuned on test range)")
+                ax.fill_between(xf, gf.min(1), gf.max(1), color=col, alpha=0.1)
+        ax.set_xlabel("env steps [M]")
+        ax.set_ylabel("mean return over the test range")
+        ax.set_title(title)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(os.path.join(a.out, f"{tag}.png"), dpi=110)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--part", required=True, choices=["ranges", "gaussian", "transfer", "epopt", "plots"])
+    ap.add_argument("--only", default="", help="ranges: one parameter")
+    ap.add_argument("--steps", type=float, default=30e6, help="env steps per seed per run")
+    ap.add_argument("--ft-steps", dest="ft_steps", type=float, default=10e6)
+    ap.add_argument("--seeds", type=int, default=2)
+    ap.add_argument("--contexts", type=int, default=64, help="K: episodes per distribution update")
+    ap.add_argument("--epopt-contexts", dest="epopt_contexts", type=int, default=1000)
+    ap.add_argument("--dist-every", dest="dist_every", type=int, default=4)
+    ap.add_argument("--dist-start", dest="dist_start", type=int, default=40)
+    ap.add_argument("--chunk", type=int, default=25, help="PPO updates per jitted chunk")
+    ap.add_argument("--eval-every", dest="eval_every", type=int, default=2, help="chunks between test evaluations")
+    ap.add_argument("--scale", type=float, default=1.0)
+    ap.add_argument("--out", default=OUT)
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    import jax
+
+    t0 = time.time()
+    log = lambda s: print(f"[{time.time() - t0:6.0f}s] {s}", flush=True)  # noqa: E731
+    log(f"device: {jax.devices()[0].device_kind}; part {a.part}")
+    {"ranges": part_ranges, "gaussian": part_gaussian, "transfer": part_transfer,
+     "epopt": lambda a, log: part_transfer(a, log, "epopt"), "plots": part_plots}[a.part](a, log)
+    log("done")
+
+
+if __name__ == "__main__":
+    main()
