@@ -24,7 +24,8 @@ from sim2real.envs.base import ASSETS  # noqa: E402
 from sim2real.sysid.generator import SYSTEMS, Case, record  # noqa: E402
 
 # (effect, target, {param: value}) per system; magnitudes are a few to tens of percent of the
-# actuator's force range, two magnitudes for most effects.
+# actuator's force range. Saturation limits are in actuator-force units (before the gear, as
+# MuJoCo's forcerange): the motors' commands are within +-1 there.
 EFFECT_CASES = {
     "pendulum": [
         ("coulomb_friction", "hinge", {"coulomb:hinge": 0.15}),
@@ -46,7 +47,7 @@ EFFECT_CASES = {
         ("sensor_offset", "hinge", {"sensor_offset:hinge": 0.05}),
         ("action_delay", "", {"action_delay": 3.0}),
         ("motor_lag", "slide", {"motor_lag:slide": 0.04}),
-        ("actuator_saturation", "slide", {"saturation:slide": 4.0}),
+        ("actuator_saturation", "slide", {"saturation:slide": 0.4}),
         ("backlash", "slide", {"backlash:slide": 0.02}),
     ],
     "arm2": [
@@ -57,7 +58,7 @@ EFFECT_CASES = {
         ("mass_offset", "lower", {"payload:lower": 0.3}),
         ("action_delay", "", {"action_delay": 2.5}),
         ("motor_lag", "shoulder", {"motor_lag:shoulder": 0.03}),
-        ("actuator_saturation", "elbow", {"saturation:elbow": 2.0}),
+        ("actuator_saturation", "elbow", {"saturation:elbow": 0.5}),
         ("backlash", "elbow", {"backlash:elbow": 0.04}),
     ],
     "prismatic": [

@@ -68,6 +68,7 @@ def test_lsdr_moves_probability_to_the_solvable_masses(tmp_path):
     assert os.path.exists(tmp_path / "lsdr" / "arrays.npz")
 
 
+@pytest.mark.slow  # ~70 s on 2 cores; run with `make test-slow`
 def test_epopt_and_fixed_dr_run(tmp_path):
     for algo, extra in [("lsdr", ["algo_options.policy_optimizer=epopt", "algo_options.epopt.num_contexts=20"]),
                         ("fixed_dr", [])]:

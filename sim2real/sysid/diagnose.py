@@ -210,8 +210,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
     # ---- name the missing physics ----------------------------------------------------------------
     q_all = np.concatenate([idyn.stacked("q")])
     q_range = np.ptp(q_all, axis=0)
+    # in actuator-force units (before the gear), the units of the saturation limit (forcerange)
     force_scale = np.array([np.percentile(np.abs(act_force[:, m.jnt_dofadr[m.actuator_trnid[a, 0]]]), 99)
-                            for a in range(m.nu)])
+                            / max(abs(float(m.actuator_gear[a, 0])), 1e-12) for a in range(m.nu)])
     cands = library(system, dt, q_range, force_scale, tuple(cfg.effects))
     bar = _Progress(cfg.progress, len(cands), "fitting candidates")
     fits = []

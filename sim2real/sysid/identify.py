@@ -79,7 +79,7 @@ class Identifier:
             idx = np.where(rec == k)[0]
             self.val[idx[int(len(idx) * (1 - val_fraction)):]] = True
         # normalise each DOF by the nominal residual's spread so every DOF counts alike
-        self.scale = np.maximum(r0[~self.val].std(0), 1e-9)
+
         self.r0 = r0
         self.dq = idyn.stacked("dq")
         # Elements where a joint (nearly) stands still are left out of every fit: there a dry
@@ -98,7 +98,24 @@ class Identifier:
                 lo, hi = m.jnt_range[j]
                 margin = 0.02 * (hi - lo)
                 near = (q[:, m.jnt_qposadr[j]] < lo + margin) | (q[:, m.jnt_qposadr[j]] > hi - margin)
+                # the smoothing window spreads an impact's acceleration over its neighbours
+                near = np.convolve(near.astype(float), np.ones(2 * window + 1), "same") > 0
                 self.use[near, :] = False
+        # Each DOF's equations are normalised by the size of the forces in it (the spread of the
+        # nominal inverse-dynamics force on the rows used), so every DOF counts alike in relative
+        # terms. Not by the nominal residual: an unactuated DOF's equation is homogeneous in its
+        # link's inertia, and a residual-based weight would reward shrinking that link to nothing.
+        # (For an unactuated DOF the total is ~0 whatever the model, so the size is taken term by
+        # term: inertial force M(q) ddq and bias force separately.)
+        from sim2real.physics.model_apply import to_mjmodel
+
+        mm = to_mjmodel(idyn.sys.physics, self.z0)
+        qs, dqs, ddqs = idyn.stacked("q"), idyn.stacked("dq"), idyn.stacked("ddq")
+        bias = idyn.inverse(mm, qs, dqs, np.zeros_like(ddqs))
+        inertial = idyn.inverse(mm, qs, dqs, ddqs) - bias
+        rows = self.use & ~self.val[:, None]
+        self.scale = np.array([max(float(np.sqrt(inertial[rows[:, k], k].var() + bias[rows[:, k], k].var()))
+                                   if rows[:, k].any() else 0.0, 1e-9) for k in range(inertial.shape[1])])
         self.cols = {}          # spec name -> full-residual regressor [n, nv]
         self.act_cols = {}      # spec name -> actuator-part regressor (re-computed under grid values)
         for name in self.nominal:
