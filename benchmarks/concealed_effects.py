@@ -12,6 +12,7 @@ the *nominal* MJCF and those recordings. Writes a CSV of the cases, the confusio
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import csv
 import os
 import sys
@@ -104,7 +105,7 @@ def run_case(case: Case, work: str) -> dict:
     train = os.path.join(work, f"{tag}_train.csv")
     held = os.path.join(work, f"{tag}_heldout.csv")
     truth = record(case, train)
-    record(Case(case.system, case.effect, case.target, case.values, case.nominal, case.noise, case.seed + 1000), held)
+    record(dataclasses.replace(case, seed=case.seed + 1000), held)
     xml = os.path.join(ASSETS, SYSTEMS[case.system][0])
     t0 = time.time()
     d = diagnose(DiagnoseConfig(model=xml, recordings=(train,), heldout=(held,), out=os.path.join(work, tag),

@@ -1,4 +1,5 @@
 """Diagnosis tool: recording validation, concealed effects found, EMPS hardware data, atomic output."""
+import dataclasses
 import json
 import os
 import subprocess
@@ -119,7 +120,7 @@ def test_model_joints_must_match(tmp_path):
 def _diagnose_case(tmp_path, case):
     train, held = str(tmp_path / "train.csv"), str(tmp_path / "held.csv")
     record(case, train)
-    record(Case(case.system, case.effect, case.target, case.values, case.nominal, case.noise, case.seed + 1000), held)
+    record(dataclasses.replace(case, seed=case.seed + 1000), held)
     return diagnose(DiagnoseConfig(model=PENDULUM, recordings=(train,), heldout=(held,), out=str(tmp_path / "d"),
                                    plots=False, progress=False,
                                    effects=("none", "coulomb_friction", "viscous_damping", "action_delay")))

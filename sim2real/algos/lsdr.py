@@ -133,9 +133,9 @@ class LSDR:
         """One PPO (or EPOpt) update, then the distribution update when it is due.
 
         ``index`` is the run's update counter as an unbatched scalar (the driver's scan); with
-        it, the due-check is a real ``lax.cond`` even when seeds are vmapped, so the K
+        it, the due-check stays a real ``lax.cond`` even when seeds are vmapped, so the K
         evaluation episodes run only on the updates that use them. Without it (plain calls),
-        the check falls back to the state's counter and a select.
+        the check uses the state's counter, which vmap batches: the cond becomes a select.
         """
         cfg = self.cfg
         sample = self.sampler(st.phi)
@@ -145,17 +145,11 @@ class LSDR:
             ppo_st, metrics = self.ppo.update(st.ppo, sample)
         st = st.replace(ppo=ppo_st, step=st.step + 1)
         if self.learn_dist:
-            if index is None:
-                do = ((st.step % cfg.dist_every) == 0) & (st.step > cfg.dist_start)
-                new, dm = self._update_dist(st)
-                st = jax.tree_util.tree_map(lambda a, b: jnp.where(do, a, b), new, st)
-                metrics.update({k: jnp.where(do, v, jnp.nan) for k, v in dm.items()})
-            else:
-                n = index + 1  # == st.step after this update
-                do = ((n % cfg.dist_every) == 0) & (n > cfg.dist_start)
-                st, dm = jax.lax.cond(do, self._update_dist,
-                                      lambda s: (s, {"dist_eval_return": jnp.full((), jnp.nan)}), st)
-                metrics.update(dm)
+            n = st.step if index is None else index + 1  # both: updates done so far
+            do = ((n % cfg.dist_every) == 0) & (n > cfg.dist_start)
+            st, dm = jax.lax.cond(do, self._update_dist,
+                                  lambda s: (s, {"dist_eval_return": jnp.full((), jnp.nan)}), st)
+            metrics.update(dm)
         metrics.update(self.describe(st.phi))
         return st, metrics
 

@@ -37,6 +37,10 @@ def align_to_model(q, dq, ddq, dt: float, timestep: float, rk4: bool):
     nxt = lambda x: np.concatenate([x[1:], x[-1:]])  # noqa: E731
     shift = lambda x: x if s == 0 else (1 - s) * x + s * nxt(x)  # noqa: E731
     q, dq, ddq = shift(q), shift(dq), shift(ddq)
-    if not rk4:
-        dq = dq - 0.5 * timestep * ddq
-    return q, dq, ddq
+    return q, velocity_state(dq, ddq, timestep, rk4), ddq
+
+
+def velocity_state(dq, ddq, timestep: float, rk4: bool):
+    """Central-difference velocity -> the velocity *state* of MuJoCo's integrator: semi-implicit
+    Euler's lags it by ``h/2 * ddq`` (physics step ``h``); RK4's is the continuous one."""
+    return dq if rk4 else dq - 0.5 * timestep * ddq

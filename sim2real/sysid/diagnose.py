@@ -21,11 +21,11 @@ import numpy as np
 
 from sim2real.sysid import locate, report
 from sim2real.sysid.candidates import EFFECTS, library
-from sim2real.sysid.derivatives import smooth_derivatives, window_for
+from sim2real.sysid.derivatives import smooth_derivatives, velocity_state, window_for
 from sim2real.sysid.export import write_fitted_mjcf
 from sim2real.sysid.identify import Identifier, rank, refine_by_simulation
 from sim2real.sysid.invdyn import InverseDynamics
-from sim2real.sysid.recordings import RecordingError, load_all
+from sim2real.sysid.recordings import check_sample_rate, load_all
 from sim2real.sysid.simulate import Simulator
 from sim2real.sysid.system import System
 
@@ -86,9 +86,9 @@ def predictions(system: System, sim: Simulator, z, rec, horizon: int, window: in
     qpos, ctrl, _, qfrc = system.arrays(rec)
     if all(rec.get("qvel", j) is not None for j in system.joints):
         qvel = np.stack([rec.get("qvel", j) for j in system.joints], -1)
-    else:  # the velocity *state* of the model's integrator (see derivatives.align_to_model)
-        q_s, qd_s, qdd_s = smooth_derivatives(qpos, rec.dt, window)
-        qvel = qd_s if system.rk4 else qd_s - 0.5 * float(system.mj.opt.timestep) * qdd_s
+    else:
+        _, qd_s, qdd_s = smooth_derivatives(qpos, rec.dt, window)
+        qvel = velocity_state(qd_s, qdd_s, float(system.mj.opt.timestep), system.rk4)
     T = len(rec)
     starts, out = sim.predict(z, qpos, qvel, ctrl, qfrc, horizon)
     H = out["qpos"].shape[1]
@@ -167,10 +167,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
     for r in train + held:
         system.check_recording_covers(r)
     dt = train[0].dt
-    for r in held:
-        if abs(r.dt - dt) / dt > 0.01:
-            raise RecordingError(f"{r.path}: sample rate {1 / r.dt:.6g} Hz differs from the training "
-                                 f"recordings' {1 / dt:.6g} Hz")
+    check_sample_rate(held, dt, "the training recordings")
     window = window_for(dt, cfg.window_seconds)
     horizon = int(round(cfg.horizon_seconds / dt)) if cfg.horizon_seconds > 0 else max(len(r) for r in train + held)
     sim = Simulator(system, dt)
@@ -181,6 +178,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
     # ---- locate ---------------------------------------------------------------------------------
     nr0, preds0 = score(system, sim, z0, train, horizon, window)
     mismatch = {"signals": {}, "windows": {}, "worst_windows": [], "regimes": {}, "residual_offset_ratio": {}}
+    errors = {}  # signal -> prediction errors over the training recordings (where predicted)
     for rec in train:
         meas = _signals(system, rec)
         for name, m in meas.items():
@@ -188,12 +186,11 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             ws = locate.windows(rec.time, err, np.std(m), cfg.num_windows)
             mismatch["windows"].setdefault(name, {})[rec.name] = ws
             mismatch["worst_windows"] += [dict(w, recording=rec.name, signal=name) for w in ws]
+            errors.setdefault(name, []).append(err[np.isfinite(err)])
     mismatch["worst_windows"].sort(key=lambda w: -w["nrmse"])
     mismatch["worst_windows"] = mismatch["worst_windows"][:10]
     for name, v in nr0.items():
-        errs = np.concatenate([preds0[r.name][name][np.isfinite(preds0[r.name][name])]
-                               - _signals(system, r)[name][np.isfinite(preds0[r.name][name])] for r in train])
-        mismatch["signals"][name] = {"nrmse": v, "offset_ratio": locate.offset_ratio(errs)}
+        mismatch["signals"][name] = {"nrmse": v, "offset_ratio": locate.offset_ratio(np.concatenate(errors[name]))}
     r_nom = ident.r0
     dq, ddq, ctrl_rows = idyn.stacked("dq"), idyn.stacked("ddq"), idyn.stacked("ctrl")
     act_force = idyn.residual(z0, parts=("act",))  # modelled actuator force (generalised)
@@ -208,8 +205,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         mismatch["residual_offset_ratio"][system.joints[j]] = locate.offset_ratio(r_nom[:, dof])
 
     # ---- name the missing physics ----------------------------------------------------------------
-    q_all = np.concatenate([idyn.stacked("q")])
-    q_range = np.ptp(q_all, axis=0)
+    q_range = np.ptp(idyn.stacked("q"), axis=0)
     # in actuator-force units (before the gear), the units of the saturation limit (forcerange)
     force_scale = np.array([np.percentile(np.abs(act_force[:, m.jnt_dofadr[m.actuator_trnid[a, 0]]]), 99)
                             / max(abs(float(m.actuator_gear[a, 0])), 1e-12) for a in range(m.nu)])
@@ -278,7 +274,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
     }
     images = {}
     if cfg.plots:
-        images = _plots(system, ident, selected, check, pb, pa, mismatch, effect_rows, out, fitted_regimes=None)
+        images = _plots(system, ident, selected, check, pb, pa, act_force, effect_rows, out)
     d["figures"] = list(images.values())
     report.markdown(os.path.join(out, "report.md"), d, images)
     with open(os.path.join(out, "diagnosis.json"), "w") as f:
@@ -291,7 +287,8 @@ def _effect_params(system: System, fit) -> dict[str, float]:
     return {k: v for k, v in fit.params.items() if k not in system.nominal}
 
 
-def _plots(system, ident, selected, check, pb, pa, mismatch, rows, out, fitted_regimes):
+def _plots(system, ident, selected, check, pb, pa, act, rows, out):
+    """Figures of the report; ``act [N, nv]``: the nominal model's actuator force on the fit rows."""
     images = {}
     rec = check[0]
     meas = _signals(system, rec)
@@ -307,7 +304,6 @@ def _plots(system, ident, selected, check, pb, pa, mismatch, rows, out, fitted_r
     tables = {"nominal": {}, "fitted": {}}
     m = system.mj
     dq, ddq, ctrl = ident.idyn.stacked("dq"), ident.idyn.stacked("ddq"), ident.idyn.stacked("ctrl")
-    act = ident.idyn.residual(ident.z0, parts=("act",))
     a0 = 0
     j = int(m.actuator_trnid[a0, 0])
     dof = m.jnt_dofadr[j]

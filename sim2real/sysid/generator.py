@@ -82,7 +82,7 @@ def _plant(name: str) -> tuple[System, Simulator]:
 
 def record(case: Case, path: str) -> dict:
     """Simulate ``case`` and write its recording CSV; returns the true physics (spec name -> value)."""
-    xml, seconds, scale = SYSTEMS[case.system]
+    _, seconds, scale = SYSTEMS[case.system]
     system, sim = _plant(case.system)
     dt = sim.dt
     T = int(seconds / dt)

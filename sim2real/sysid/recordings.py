@@ -161,6 +161,14 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
     return Recording(path, t, cols)
 
 
+def check_sample_rate(recs, dt: float, reference: str) -> None:
+    """Every recording must be sampled at ``dt`` (within 1%); the error names the file and ``reference``."""
+    for r in recs:
+        if abs(r.dt - dt) / dt > 0.01:
+            raise RecordingError(f"{r.path}: sample rate {1 / r.dt:.6g} Hz differs from {reference} "
+                                 f"({1 / dt:.6g} Hz); resample to one rate")
+
+
 def load_all(paths, model: mujoco.MjModel, what: str = "recordings") -> list[Recording]:
     """Load several recordings and check they share one sample rate and the same columns."""
     if isinstance(paths, str):
@@ -169,10 +177,8 @@ def load_all(paths, model: mujoco.MjModel, what: str = "recordings") -> list[Rec
         raise RecordingError(f"no {what} given")
     recs = [load(p, model) for p in paths]
     ref = recs[0]
+    check_sample_rate(recs[1:], ref.dt, ref.path)
     for r in recs[1:]:
-        if abs(r.dt - ref.dt) / ref.dt > 0.01:
-            raise RecordingError(f"{r.path}: sample rate {1 / r.dt:.6g} Hz differs from {ref.path} "
-                                 f"({1 / ref.dt:.6g} Hz); resample to one rate")
         if set(r.columns) != set(ref.columns):
             diff = sorted(set(r.columns) ^ set(ref.columns))
             raise RecordingError(f"{r.path}: columns differ from {ref.path} ({', '.join(diff)})")
