@@ -192,3 +192,14 @@ class Effects:
         noise = std * jax.random.normal(key, off.shape)
         meas = qpos[self.sense_qpos] + off + noise
         return qpos.at[self.sense_qpos].set(jnp.where((off != 0) | (std > 0), meas, qpos[self.sense_qpos]))
+
+    def unsense(self, z, qpos_meas):
+        """Joint positions ``[nq]`` implied by measured ones under ``z``'s sensor offsets (noise ignored).
+
+        Starting a simulation from a measured state needs this: a hypothesised offset changes
+        where the joint really was.
+        """
+        if self.sense_qpos.size == 0:
+            return qpos_meas
+        off = self._take(z, self.r_off)
+        return qpos_meas.at[self.sense_qpos].add(-off)

@@ -13,9 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def nrmse(pred: np.ndarray, meas: np.ndarray, scale: float) -> float:
-    return float(np.sqrt(np.mean((pred - meas) ** 2)) / max(scale, 1e-12))
+from sim2real.sysid.discrepancy import nrmse  # noqa: F401  (shared with SimOpt; re-exported)
 
 
 def regimes(v: np.ndarray, a: np.ndarray, force: np.ndarray, force_limit: float | None,
@@ -83,5 +81,5 @@ def windows(time: np.ndarray, err: np.ndarray, scale: float, n: int) -> list[dic
         if len(e) == 0:
             continue
         out.append({"t_start": float(time[a]), "t_end": float(time[b - 1]),
-                    "nrmse": float(np.sqrt(np.mean(e**2)) / max(scale, 1e-12))})
+                    "nrmse": nrmse(e, 0.0, scale)})
     return out

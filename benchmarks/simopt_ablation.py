@@ -1,0 +1,226 @@
+"""SimOpt ablation in spirit (seed 002, Figs. 6-7 and 9): the target differs from the initial
+distribution by a large offset, wide uniform DR fails, SimOpt transfers in <= 5 iterations with
+3 target rollouts per iteration.
+
+Task: pendulum swing-up (2 Nm motor). The "real" pendulum has a mis-calibrated angle encoder
+(offset ``delta``) and a heavier pole. A policy that balances the *measured* upright holds the real
+pole ``delta`` off vertical, where gravity needs more torque than the motor has: it falls. The
+offset cannot be seen from one observation, so no single policy trained on a wide box of offsets
+can compensate it; SimOpt identifies it from closed-loop rollouts.
+
+    python benchmarks/simopt_ablation.py             # both targets, SimOpt + baselines, plots (CPU, ~40 min)
+    python benchmarks/simopt_ablation.py --plots     # figures from the saved CSV/NPZ
+    python benchmarks/simopt_ablation.py --scale 0.05 --out /tmp/x   # a quick check of the script
+
+Writes benchmarks/results/simopt_ablation/: ``<target>_iterations.csv`` (mean/std/returns per
+iteration and seed), ``<target>_distribution.npz``, ``baselines.csv``, ``summary.json`` and the
+plots ``mu_sigma.png``, ``covariance.png``, ``target_return.png``.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import shutil
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = os.path.join(HERE, "results", "simopt_ablation")
+CONFIG = os.path.join(HERE, "..", "configs", "simopt_pendulum.yaml")
+PARAMS = ["sensor_offset:hinge", "mass:pole"]
+TARGETS = {  # like the paper's drawer 15 cm and 22 cm away: two offsets, both far outside N(mu0, Sigma0)
+    "offset_0.3_mass_1.5": {"sensor_offset:hinge": 0.3, "mass:pole": 1.5},
+    "offset_0.5_mass_1.3": {"sensor_offset:hinge": 0.5, "mass:pole": 1.3},
+}
+WIDE = ([-0.6, 0.5], [0.6, 2.0])  # the wide uniform DR box (covers both targets)
+EVAL_EPISODES = 64
+
+
+def run_simopt(name, target, args):
+    from sim2real import config as config_lib
+    from sim2real.simopt_run import SimOptRunConfig, run
+
+    tgt = "{" + ", ".join(f"'{k}': {v}" for k, v in target.items()) + "}"
+    cfg = config_lib.load(SimOptRunConfig, [
+        f"config={CONFIG}", f"name=simopt_{name}", f"out_dir={args.work}", "overwrite=true", "progress=false",
+        f"num_seeds={args.seeds}", f"target={tgt}",
+        f"simopt.init_ppo_updates={max(2, int(300 * args.scale))}",
+        f"simopt.ppo_updates={max(2, int(args.ppo_updates * args.scale))}",
+        f"simopt.num_samples={max(16, int(256 * args.scale))}", f"simopt.eval_episodes={EVAL_EPISODES}"])
+    t0 = time.time()
+    out = run(cfg)
+    print(f"[simopt {name}] {time.time() - t0:.0f} s", flush=True)
+    shutil.copy(os.path.join(out["run_dir"], "iterations.csv"), os.path.join(args.out, f"{name}_iterations.csv"))
+    shutil.copy(os.path.join(out["run_dir"], "distribution.npz"), os.path.join(args.out, f"{name}_distribution.npz"))
+    return cfg
+
+
+def train_baseline(label, dr_args, args, so_cfg):
+    """PPO with the same network and the same number of updates as a whole SimOpt run."""
+    from sim2real import config as config_lib
+    from sim2real.train import TrainConfig, train
+
+    s = so_cfg.simopt
+    updates = (s.init_ppo_updates or s.ppo_updates) + s.iterations * s.ppo_updates
+    p = so_cfg.ppo
+    cfg = config_lib.load(TrainConfig, [
+        "env=pendulum", f"name=baseline_{label}", f"out_dir={args.work}", "overwrite=true", "progress=false",
+        "tensorboard=false", f"num_seeds={args.seeds}", f"total_steps={updates * p.batch_size}",
+        f"updates_per_chunk={max(1, updates // 4)}", f"ppo.num_envs={p.num_envs}", f"ppo.num_steps={p.num_steps}",
+        f"ppo.num_epochs={p.num_epochs}", f"ppo.num_minibatches={p.num_minibatches}", f"ppo.gamma={p.gamma}",
+        f"ppo.lr={p.lr}", "ppo.anneal_lr=false", f"ppo.reward_scale={p.reward_scale}",
+        f"ppo.net.hidden={list(p.net.hidden)}", *dr_args])
+    t0 = time.time()
+    out = train(cfg)
+    print(f"[baseline {label}] {time.time() - t0:.0f} s", flush=True)
+    return out
+
+
+def evaluate_on(out, target, seeds):
+    import jax
+
+    from sim2real.evaluate import episodes
+
+    env, algo, state = out["env"], out["algo"], out["state"]
+    z = np.tile(env.z_of(**target), (EVAL_EPISODES, 1))
+    params, stats = algo.policy(state)
+    f = jax.jit(jax.vmap(lambda p, s, k: episodes(env, algo.ppo, p, s, z, k, 1)["return"].mean()))
+    return np.asarray(f(params, stats, jax.random.split(jax.random.PRNGKey(7), seeds)))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seeds", type=int, default=2)
+    ap.add_argument("--scale", type=float, default=1.0)
+    ap.add_argument("--out", default=OUT)
+    ap.add_argument("--work", default="/tmp/simopt_ablation_runs")
+    ap.add_argument("--plots", action="store_true")
+    ap.add_argument("--ppo-updates", type=int, default=100, help="PPO updates per SimOpt iteration")
+    ap.add_argument("--targets", default=",".join(TARGETS))
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    if args.plots:
+        return plots(args.out)
+    import jax
+
+    rows, summary = [], {"device": str(jax.devices()[0].device_kind), "seeds": args.seeds, "scale": args.scale}
+    names = [n for n in args.targets.split(",") if n]
+    so_cfg = None
+    for name in names:
+        so_cfg = run_simopt(name, TARGETS[name], args)
+    # baselines: trained once, evaluated on every target
+    wide = [f"dr.params={PARAMS}", f"dr.low={WIDE[0]}", f"dr.high={WIDE[1]}"]
+    baselines = {"nominal": [], "wide_udr": wide}
+    baselines.update({f"oracle_{n}": ["dr.fixed={" + ", ".join(f"'{k}': {v}" for k, v in TARGETS[n].items()) + "}"]
+                      for n in names})
+    for label, dr_args in baselines.items():
+        out = train_baseline(label, dr_args, args, so_cfg)
+        for name in names:
+            if label.startswith("oracle_") and label != f"oracle_{name}":
+                continue
+            r = evaluate_on(out, TARGETS[name], args.seeds)
+            rows.append({"target": name, "method": label.split("_")[0] if label.startswith("oracle") else label,
+                         **{f"seed{s}": float(v) for s, v in enumerate(r)}, "mean": float(r.mean())})
+            print(rows[-1], flush=True)
+    with open(os.path.join(args.out, "baselines.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    for name in names:
+        it = _read(os.path.join(args.out, f"{name}_iterations.csv"))
+        last = int(max(r["iteration"] for r in it))
+        fin = [r for r in it if r["iteration"] == last]
+        summary[name] = {
+            "truth": TARGETS[name],
+            "final_mean": {p: float(np.mean([r[f"mean:{p}"] for r in fin])) for p in PARAMS},
+            "final_std": {p: float(np.mean([r[f"std:{p}"] for r in fin])) for p in PARAMS},
+            "eval_return_per_iteration": [float(np.mean([r["eval_return"] for r in it if r["iteration"] == i]))
+                                          for i in range(last + 1)],
+            "baselines": {r["method"]: r["mean"] for r in rows if r["target"] == name},
+        }
+    with open(os.path.join(args.out, "summary.json"), "w") as f:
+        json.dump(summary, f, indent=2)
+    plots(args.out)
+
+
+def _read(path):
+    with open(path) as f:
+        return [{k: (float(v) if k not in ("target", "method") else v) for k, v in r.items()} for r in csv.DictReader(f)]
+
+
+def plots(out):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [n for n in TARGETS if os.path.exists(os.path.join(out, f"{n}_iterations.csv"))]
+    base = _read(os.path.join(out, "baselines.csv")) if os.path.exists(os.path.join(out, "baselines.csv")) else []
+    # Fig. 6 / 9 (left): mean and std per iteration against the truth
+    fig, axes = plt.subplots(len(names), len(PARAMS), figsize=(5 * len(PARAMS), 3.2 * len(names)), squeeze=False)
+    for i, n in enumerate(names):
+        it = _read(os.path.join(out, f"{n}_iterations.csv"))
+        seeds = sorted({int(r["seed"]) for r in it})
+        for j, p in enumerate(PARAMS):
+            ax = axes[i, j]
+            for s in seeds:
+                rs = [r for r in it if int(r["seed"]) == s]
+                x = [r["iteration"] for r in rs]
+                mu = np.array([r[f"mean:{p}"] for r in rs])
+                sd = np.array([r[f"std:{p}"] for r in rs])
+                ax.plot(x, mu, marker="o", label=f"seed {s}")
+                ax.fill_between(x, mu - sd, mu + sd, alpha=0.2)
+            ax.axhline(TARGETS[n][p], color="k", ls="--", label="truth")
+            ax.set_title(f"{n}: {p}")
+            ax.set_xlabel("SimOpt iteration (distribution the policy trained on)")
+            ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "mu_sigma.png"), dpi=110)
+    # covariance heat maps (seed 0): initial, after 1, 2 iterations, final
+    fig, axes = plt.subplots(len(names), 4, figsize=(14, 3.4 * len(names)), squeeze=False)
+    for i, n in enumerate(names):
+        d = np.load(os.path.join(out, f"{n}_distribution.npz"))
+        covs = list(d["cov"][:, 0]) + [d["final_cov"][0]]
+        picks = [0, 1, 2, len(covs) - 1]
+        for j, k in enumerate(picks):
+            c = covs[k]
+            sd = np.sqrt(np.diag(c))
+            corr = c / np.outer(sd, sd)
+            ax = axes[i, j]
+            im = ax.imshow(corr, vmin=-1, vmax=1, cmap="RdBu_r")
+            for a in range(len(PARAMS)):
+                for b in range(len(PARAMS)):
+                    ax.text(b, a, f"{c[a, b]:.2g}", ha="center", va="center", fontsize=8)
+            short = [q.split(":")[0] for q in PARAMS]
+            ax.set_xticks(range(len(PARAMS)), short, fontsize=7)
+            ax.set_yticks(range(len(PARAMS)), short if j == 0 else [], fontsize=7)
+            ax.set_title(f"{n}\n{'final' if k == len(covs) - 1 else f'iteration {k}'} (colour: correlation)", fontsize=8)
+        fig.colorbar(im, ax=axes[i].tolist(), shrink=0.8)
+    fig.savefig(os.path.join(out, "covariance.png"), dpi=110)
+    # Fig. 7: target return per iteration, with the baselines
+    fig, axes = plt.subplots(1, len(names), figsize=(6 * len(names), 4), squeeze=False)
+    for i, n in enumerate(names):
+        ax = axes[0, i]
+        it = _read(os.path.join(out, f"{n}_iterations.csv"))
+        its = sorted({int(r["iteration"]) for r in it})
+        ev = np.array([[r["eval_return"] for r in it if int(r["iteration"]) == k] for k in its])
+        ax.errorbar(its, ev.mean(1), yerr=ev.std(1), marker="o", label="SimOpt (policy of iteration i)")
+        for r, c in zip([r for r in base if r["target"] == n], ["C1", "C2", "C3"]):
+            ax.axhline(r["mean"], color=c, ls="--", label=f"{r['method']} (same PPO updates)")
+        ax.set_xlabel("SimOpt iteration")
+        ax.set_ylabel(f"return on the target ({EVAL_EPISODES} episodes)")
+        ax.set_title(n)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "target_return.png"), dpi=110)
+    print(f"plots in {out}")
+
+
+if __name__ == "__main__":
+    main()
