@@ -130,7 +130,7 @@ def part_train(args):
     key = jax.random.PRNGKey(123)
     E = args.episodes
     grid_path = os.path.join(args.out, "grid.npz")
-    if os.path.exists(grid_path) and args.resume:
+    if os.path.exists(grid_path) and (args.resume or args.part == "esmaml"):  # esmaml adds to the baselines' grid
         results = dict(np.load(grid_path))
 
     def save():
