@@ -119,6 +119,7 @@ def test_reps_moves_the_distribution_to_the_hidden_physics(simopt):
     assert after.sum() < before.sum()
 
 
+@pytest.mark.slow  # compiles PPO training + target rollouts + REPS as one program (~1.5 min on 2 cores)
 def test_iteration_is_jittable_and_vmaps_over_seeds(simopt):
     so, _, zt, _ = simopt
     st = jax.jit(jax.vmap(so.init))(jax.random.split(jax.random.PRNGKey(0), 2))
