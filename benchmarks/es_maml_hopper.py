@@ -98,8 +98,6 @@ def eval_grid(env, ppo, params, stats, key, episodes_per_cell):
 
 def eval_grid_adapted(es, params, stats, key, episodes_per_cell):
     """Few-shot: 3 PPO updates on each test cell, then full-length episodes; ``[S, 12, 8]``."""
-    import dataclasses
-
     import jax
 
     from sim2real.evaluate import episodes
@@ -122,7 +120,6 @@ def part_train(args):
     import jax
 
     from sim2real import checkpoint
-    from sim2real.rl.networks import NetConfig
 
     os.makedirs(args.out, exist_ok=True)
     results = {}
@@ -224,7 +221,6 @@ def part_speed(args):
 
     from sim2real import config as config_lib
     from sim2real.envs import make
-    from sim2real.rl.ppo import PPOConfig
     from sim2real.train import TrainConfig
 
     cfg = config_lib.load(TrainConfig, BASE)

@@ -26,7 +26,7 @@ import numpy as np
 
 from sim2real import checkpoint
 from sim2real.algos.base import DRConfig
-from sim2real.algos.simopt import RealData, SimOpt, SimOptConfig, real_from_recordings
+from sim2real.algos.simopt import SimOpt, SimOptConfig, real_from_recordings
 from sim2real.envs import make
 from sim2real.rl.ppo import PPOConfig
 

@@ -32,7 +32,7 @@ from sim2real.algos import reps
 from sim2real.algos.base import DRConfig, DRSpace
 from sim2real.dists import gaussian
 from sim2real.envs.base import Env
-from sim2real.rl import networks
+from sim2real.rl import normalize
 from sim2real.rl.ppo import PPO, PPOConfig, PPOState
 from sim2real.rl.rollout import to_ctrl
 from sim2real.sysid import discrepancy
@@ -187,11 +187,10 @@ class SimOpt:
 
         def step(c, k):
             s, alive, ret = c
-            (mean, _, _), _ = self.ppo.net.apply(params, _norm(obs_stats, s.obs), empty, empty, jnp.zeros((), bool))
+            (mean, _, _), _ = self.ppo.net.apply(params, normalize.apply(obs_stats, s.obs), empty, empty, jnp.zeros((), bool))
             ctrl = to_ctrl(env, mean)
             s2 = env.step(s, ctrl, z)
             ret = ret + jnp.where(alive, s2.reward, 0.0)
-            done = s2.terminated | s2.truncated
             s = jax.tree_util.tree_map(lambda new, old: jnp.where(alive, new, old), s2, s)
             sig = jnp.concatenate([env.effects.sense(z, s.data.qpos, k), s.data.qvel])
             out = (sig, alive.astype(jnp.float32), ctrl)
@@ -347,9 +346,4 @@ def save_recordings(sim: SimOpt, real: RealData, folder: str, prefix: str = "rea
         paths.append(path)
     return paths
 
-
-def _norm(stats, obs):
-    from sim2real.rl import normalize
-
-    return normalize.apply(stats, obs)
 
