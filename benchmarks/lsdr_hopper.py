@@ -36,6 +36,7 @@ TABLE_I = {
     "friction": ((-3.0, 10.0), (-3.0, 3.0)),
     "joint_damping": ((-10.0, 30.0), (-1.0, 26.0)),
 }
+PPO_BATCH = 4096 * 16
 BASE = [  # GPU scale: 4096 envs x 16 steps per PPO update
     "env=hopper", "ppo.num_envs=4096", "ppo.num_steps=16", "ppo.num_epochs=4", "ppo.num_minibatches=8",
     "ppo.gamma=0.99", "ppo.lr=3e-4", "ppo.reward_scale=0.1", "ppo.net.hidden=[128,128]", "ppo.net.activation=tanh",
@@ -190,10 +191,12 @@ def part_transfer(a, log, optimizer="ppo"):
     grid = [[g] for g in np.linspace(prior[0], prior[1], 16)]
     evaluate = test_evaluator(["torso_size"], grid)
     tag = "transfer" if optimizer == "ppo" else "epopt"
-    result = {}
+    path = os.path.join(a.out, f"{tag}.json")
+    # one device call may run one algorithm (--algos): merge into what earlier calls wrote
+    result = json.load(open(path)) if os.path.exists(path) else {}
     extra_opt = [] if optimizer == "ppo" else ["algo_options.policy_optimizer=epopt",
                                                f"algo_options.epopt.num_contexts={a.epopt_contexts}"]
-    for algo in ("lsdr", "fixed_dr"):
+    for algo in a.algos.split(","):
         log(f"{algo} ({optimizer}) on torso size over {prior}")
         cfg = config([f"name={tag}_{algo}", f"algo={algo}", "dr.params=[torso_size]", f"dr.low=[{prior[0]}]",
                       f"dr.high=[{prior[1]}]", "algo_options.dist=binned", f"algo_options.num_contexts={a.contexts}",
@@ -209,9 +212,11 @@ def part_transfer(a, log, optimizer="ppo"):
             result[algo]["finetune"] = ft_rows
         if probs is not None:
             np.savez(os.path.join(a.out, f"{tag}_{algo}_probs.npz"), probs=probs)
-    result["grid"] = grid
-    with open(os.path.join(a.out, f"{tag}.json"), "w") as f:
-        json.dump(result, f)
+        result["grid"] = grid
+        result.setdefault("settings", {})[algo] = {"steps": a.steps, "seeds": a.seeds, "chunk": a.chunk,
+                                                   "epopt_contexts": a.epopt_contexts if optimizer == "epopt" else None}
+        with open(path, "w") as f:
+            json.dump(result, f)
 
 
 def part_plots(a, log):
@@ -269,8 +274,12 @@ def part_plots(a, log):
         d = json.load(open(p))
         fig, ax = plt.subplots(figsize=(6, 3.6))
         for algo, col in (("lsdr", "C3"), ("fixed_dr", "C0")):
+            if algo not in d:
+                continue
             rows = [r for r in d[algo]["train"] if "test_grid" in r]
-            x = np.array([r["env_steps"] for r in rows]) / 1e6
+            # EPOpt's updates run num_contexts whole episodes each, not the PPO batch the
+            # env_steps column counts: its axis is PPO updates
+            x = np.array([r["env_steps"] for r in rows]) / (PPO_BATCH if tag == "epopt" else 1e6)
             g = np.array([np.mean(r["test_grid"], 1) for r in rows])  # [E, S] mean over the grid
             ax.plot(x, g.mean(1), color=col, label=f"{algo} (training)")
             ax.fill_between(x, g.min(1), g.max(1), color=col, alpha=0.2)
@@ -280,7 +289,7 @@ def part_plots(a, log):
                 gf = np.array([np.mean(r["test_grid"], 1) for r in f_rows])
                 ax.plot(xf, gf.mean(1), color=col, ls="--", label=f"{algo} (fine-tuned on test range)")
                 ax.fill_between(xf, gf.min(1), gf.max(1), color=col, alpha=0.1)
-        ax.set_xlabel("env steps [M]")
+        ax.set_xlabel("PPO updates (worst 10% of 1000 episodes each)" if tag == "epopt" else "env steps [M]")
         ax.set_ylabel("mean return over the test range")
         ax.set_title(title)
         ax.legend(fontsize=8)
@@ -302,6 +311,7 @@ def main():
     ap.add_argument("--chunk", type=int, default=25, help="PPO updates per jitted chunk")
     ap.add_argument("--eval-every", dest="eval_every", type=int, default=2, help="chunks between test evaluations")
     ap.add_argument("--scale", type=float, default=1.0)
+    ap.add_argument("--algos", default="lsdr,fixed_dr", help="transfer/epopt: which runs (comma-separated)")
     ap.add_argument("--out", default=OUT)
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)

@@ -42,9 +42,9 @@ WIDE = ([-0.6, 0.5], [0.6, 2.0])  # the wide uniform DR box (covers both targets
 EVAL_EPISODES = 64
 
 
-def run_simopt(name, target, args):
+def simopt_config(name, target, args):
     from sim2real import config as config_lib
-    from sim2real.simopt_run import SimOptRunConfig, run
+    from sim2real.simopt_run import SimOptRunConfig
 
     tgt = "{" + ", ".join(f"'{k}': {v}" for k, v in target.items()) + "}"
     cfg = config_lib.load(SimOptRunConfig, [
@@ -53,6 +53,13 @@ def run_simopt(name, target, args):
         f"simopt.init_ppo_updates={max(2, int(300 * args.scale))}",
         f"simopt.ppo_updates={max(2, int(args.ppo_updates * args.scale))}",
         f"simopt.num_samples={max(16, int(256 * args.scale))}", f"simopt.eval_episodes={EVAL_EPISODES}"])
+    return cfg
+
+
+def run_simopt(name, target, args):
+    from sim2real.simopt_run import run
+
+    cfg = simopt_config(name, target, args)
     t0 = time.time()
     out = run(cfg)
     print(f"[simopt {name}] {time.time() - t0:.0f} s", flush=True)
@@ -103,6 +110,9 @@ def main():
     ap.add_argument("--plots", action="store_true")
     ap.add_argument("--ppo-updates", type=int, default=100, help="PPO updates per SimOpt iteration")
     ap.add_argument("--targets", default=",".join(TARGETS))
+    ap.add_argument("--skip-simopt", dest="skip_simopt", action="store_true",
+                    help="train baselines only; the targets' SimOpt CSVs must already be in --out")
+    ap.add_argument("--baselines", default="nominal,wide_udr,oracle", help="which baselines to (re)train")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     if args.plots:
@@ -113,13 +123,23 @@ def main():
     names = [n for n in args.targets.split(",") if n]
     so_cfg = None
     for name in names:
-        so_cfg = run_simopt(name, TARGETS[name], args)
+        if args.skip_simopt:  # baselines only (another device call): the SimOpt CSVs are in --out
+            so_cfg = simopt_config(name, TARGETS[name], args)
+        else:
+            so_cfg = run_simopt(name, TARGETS[name], args)
     # baselines: trained once, evaluated on every target
     wide = [f"dr.params={PARAMS}", f"dr.low={WIDE[0]}", f"dr.high={WIDE[1]}"]
     baselines = {"nominal": [], "wide_udr": wide}
     baselines.update({f"oracle_{n}": ["dr.fixed={" + ", ".join(f"'{k}': {v}" for k, v in TARGETS[n].items()) + "}"]
                       for n in names})
-    for label, dr_args in baselines.items():
+    wanted = set(args.baselines.split(","))
+    method = lambda label: "oracle" if label.startswith("oracle_") else label  # noqa: E731
+    todo = {label: a for label, a in baselines.items() if method(label) in wanted}
+    path = os.path.join(args.out, "baselines.csv")
+    if os.path.exists(path):  # keep the rows of baselines an earlier call trained and this one does not
+        redo = {method(label) for label in todo}
+        rows = [r for r in _read(path) if r["method"] not in redo or r["target"] not in names]
+    for label, dr_args in todo.items():
         out = train_baseline(label, dr_args, args, so_cfg)
         for name in names:
             if label.startswith("oracle_") and label != f"oracle_{name}":
@@ -128,10 +148,10 @@ def main():
             rows.append({"target": name, "method": label.split("_")[0] if label.startswith("oracle") else label,
                          **{f"seed{s}": float(v) for s, v in enumerate(r)}, "mean": float(r.mean())})
             print(rows[-1], flush=True)
-    with open(os.path.join(args.out, "baselines.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+        with open(path, "w", newline="") as f:  # after every baseline: a timed-out call keeps the rest
+            w = csv.DictWriter(f, fieldnames=list(dict.fromkeys(k for r in rows for k in r)))
+            w.writeheader()
+            w.writerows(rows)
     for name in names:
         it = _read(os.path.join(args.out, f"{name}_iterations.csv"))
         last = int(max(r["iteration"] for r in it))
