@@ -118,6 +118,9 @@ def run_case(case: Case, work: str) -> dict:
             "confidence": round(d["confidence"], 3),
             "runner_up": d["effects"][1]["effect"] if len(d["effects"]) > 1 else "",
             "heldout_before": round(d["fit"]["before"], 5), "heldout_after": round(d["fit"]["after"], 5),
+            # every candidate: BIC score against none, simulated (verified) prediction error
+            "candidates": " ".join(f"{e['effect']}@{e['target']}:{e['score']:.1f}:{e['verified_nrmse'] or float('nan'):.4g}"
+                                   for e in d["effects"]),
             "correct": sel["effect"] == case.effect and (case.effect in ("none", "action_delay")
                                                          or sel["target"] == case.target),
             "seconds": round(time.time() - t0, 1)}

@@ -128,7 +128,8 @@ def part_train(args):
     E = args.episodes
     grid_path = os.path.join(args.out, "grid.npz")
     if os.path.exists(grid_path) and (args.resume or args.part == "esmaml"):  # esmaml adds to the baselines' grid
-        results = dict(np.load(grid_path))
+        # returns only: the axes are written again by save()
+        results = {k: v for k, v in np.load(grid_path).items() if k not in ("masses", "frictions")}
 
     def save():
         np.savez(grid_path + ".tmp.npz", **results, masses=MASSES, frictions=FRICTIONS)

@@ -162,3 +162,30 @@ def test_emps_hardware_diagnosis(tmp_path):
     fitted = mujoco.MjModel.from_xml_path(str(out / "fitted.xml"))
     assert fitted.dof_frictionloss[0] == pytest.approx(fc, rel=1e-4)
     assert fitted.body_mass[1] == pytest.approx(d["fitted_params"]["mass:carriage"], rel=1e-4)
+
+
+# --------------------------------------------------------------------------------------------
+# predictions on a recording's tail carry the command path's state from its start
+
+def test_tail_predictions_keep_the_effect_state(tmp_path):
+    """A prediction segment late in a recording starts the motor-lag filter where the recording
+    left it; slicing the recording instead restarts it from rest (and biases the comparison)."""
+    from sim2real.sysid.derivatives import window_for
+    from sim2real.sysid.diagnose import predictions
+    from sim2real.sysid.generator import _plant
+
+    case = Case("pendulum", "motor_lag", "motor", (("motor_lag:motor", 0.1),), noise=0.0, seed=3)
+    path = str(tmp_path / "lag.csv")
+    truth = record(case, path)
+    system, sim = _plant("pendulum")
+    rec = load_all([path], system.mj, "test")[0]
+    z = system.spec.vector(truth)
+    win, H, first = window_for(rec.dt), 50, 1500
+    tail = predictions(system, sim, z, rec, H, win, first=first)["qpos:hinge"]
+    assert np.all(np.isnan(tail[:first + 1])) and np.isfinite(tail[first + 1: first + 1 + H]).all()
+    full = predictions(system, sim, z, rec, H, win)["qpos:hinge"]
+    np.testing.assert_allclose(tail[first + 1:], full[first + 1:], atol=1e-6)  # same segments, same state
+    meas = rec.get("qpos", "hinge")
+    sliced = predictions(system, sim, z, rec.slice(first, len(rec)), H, win)["qpos:hinge"]
+    err = lambda p: np.sqrt(np.nanmean((p - meas[first:]) ** 2))  # noqa: E731
+    assert err(tail[first:]) < 0.5 * err(sliced)

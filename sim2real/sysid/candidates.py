@@ -13,7 +13,7 @@ none                   --          nominal only
 coulomb_friction       joint       ``coulomb`` (+ ``coulomb_asym``: different level each way)
 viscous_damping        joint       ``viscous`` (only where the MJCF declares no damping)
 joint_stiffness        joint       ``stiffness`` (only where the MJCF declares no spring)
-sensor_offset          joint       ``sensor_offset``
+sensor_offset          joint       ``sensor_offset`` (grid, symmetric)
 mass_offset            body        ``payload`` (bodies with a ``payload_<body>`` site off the COM)
 action_delay           global      ``action_delay`` (grid, fractional control steps)
 motor_lag              actuator    ``motor_lag`` (grid, time constant)
@@ -86,8 +86,14 @@ def library(system: System, dt: float, q_range: np.ndarray, force_scale: np.ndar
         if "joint_stiffness" in effects and not system.declared_stiffness(jn):
             out.append(Candidate("joint_stiffness", jn, (f"stiffness:{jn}",)))
         if "sensor_offset" in effects:
-            out.append(Candidate("sensor_offset", jn, (f"sensor_offset:{jn}",)))
-        del j
+            # searched on a symmetric grid (+ a scalar search), not linearised at zero: behind a
+            # force-limited servo the residual is flat in the offset until the offset is found
+            # (the nominal model's servo force sits at its limit), so a Gauss-Newton step from
+            # zero goes nowhere
+            r = max(float(q_range[j]), 1e-6)
+            mag = np.geomspace(2e-4 * r, 0.1 * r, 8)
+            out.append(Candidate("sensor_offset", jn, grid_param=f"sensor_offset:{jn}",
+                                 grid=tuple(np.concatenate([-mag[::-1], [0.0], mag]))))
     for bn in system.bodies:
         # a payload at the body's own centre of mass is the same hypothesis as a re-fitted body
         # mass (``none``): only bodies with a declared ``payload_<body>`` site elsewhere get one
@@ -97,13 +103,17 @@ def library(system: System, dt: float, q_range: np.ndarray, force_scale: np.ndar
             out.append(Candidate("mass_offset", bn, (f"payload:{bn}",)))
     max_delay = system.spec["action_delay"].high
     if "action_delay" in effects:
+        # timing effects are searched from one sample period up: a shorter delay or lag is
+        # within the recording's timestamp convention (where in the sample period a command
+        # took effect), and a sub-sample one improves predictions from noisy measured states
+        # even of a plant that has none
         out.append(Candidate("action_delay", "", grid_param="action_delay",
-                             grid=tuple(np.arange(0.5, max_delay + 1e-9, 0.5))))
+                             grid=tuple(np.arange(1.0, max_delay + 1e-9, 0.5))))
     for a, an in enumerate(system.actuators):
         j = int(m.actuator_trnid[a, 0])
         if "motor_lag" in effects:
             out.append(Candidate("motor_lag", an, grid_param=f"motor_lag:{an}",
-                                 grid=tuple(np.geomspace(0.7 * dt, 40 * dt, 16))))
+                                 grid=tuple(np.geomspace(dt, 40 * dt, 16))))
         if "actuator_saturation" in effects:
             s = float(force_scale[a])
             out.append(Candidate("actuator_saturation", an, grid_param=f"saturation:{an}",

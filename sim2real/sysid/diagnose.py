@@ -81,8 +81,10 @@ def _signals(system: System, rec):
     return out
 
 
-def predictions(system: System, sim: Simulator, z, rec, horizon: int, window: int) -> dict[str, np.ndarray]:
-    """Short-horizon predictions of every signal, aligned with the recording (NaN where none)."""
+def predictions(system: System, sim: Simulator, z, rec, horizon: int, window: int,
+                first: int = 0) -> dict[str, np.ndarray]:
+    """Short-horizon predictions of every signal, aligned with the recording (NaN where none);
+    segments start at sample ``first`` or later."""
     qpos, ctrl, _, qfrc = system.arrays(rec)
     if all(rec.get("qvel", j) is not None for j in system.joints):
         qvel = np.stack([rec.get("qvel", j) for j in system.joints], -1)
@@ -90,7 +92,7 @@ def predictions(system: System, sim: Simulator, z, rec, horizon: int, window: in
         _, qd_s, qdd_s = smooth_derivatives(qpos, rec.dt, window)
         qvel = velocity_state(qd_s, qdd_s, float(system.mj.opt.timestep), system.rk4)
     T = len(rec)
-    starts, out = sim.predict(z, qpos, qvel, ctrl, qfrc, horizon)
+    starts, out = sim.predict(z, qpos, qvel, ctrl, qfrc, horizon, first=first)
     H = out["qpos"].shape[1]
     res = {name: np.full(T, np.nan) for name in _signals(system, rec)}
     for s, st in enumerate(starts):
@@ -104,15 +106,20 @@ def predictions(system: System, sim: Simulator, z, rec, horizon: int, window: in
     return res
 
 
-def score(system: System, sim: Simulator, z, recs, horizon: int, window: int):
-    """Per-signal NRMSE (normalised by the measured signal's std) over recordings, and the predictions."""
+def score(system: System, sim: Simulator, z, recs, horizon: int, window: int, first=None):
+    """Per-signal NRMSE (normalised by the measured signal's std) over recordings, and the predictions.
+
+    ``first``: per recording, the sample where scoring starts (a held-back tail); the effect
+    states before it come from the recording's start.
+    """
     per, preds = {}, {}
-    for rec in recs:
-        p = predictions(system, sim, z, rec, horizon, window)
+    for k, rec in enumerate(recs):
+        f0 = int(first[k]) if first is not None else 0
+        p = predictions(system, sim, z, rec, horizon, window, f0)
         preds[rec.name] = p
         for name, meas in _signals(system, rec).items():
             ok = np.isfinite(p[name])
-            per.setdefault(name, []).append((p[name][ok] - meas[ok], np.std(meas)))
+            per.setdefault(name, []).append((p[name][ok] - meas[ok], np.std(meas[f0:])))
     nr = {name: float(np.sqrt(np.mean(np.concatenate([e for e, _ in v]) ** 2)) / max(np.mean([s for _, s in v]), 1e-12))
           for name, v in per.items()}
     return nr, preds
@@ -217,10 +224,10 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         bar.step(f"fitted {c.label}")
     bar.close()
     # verify the front-runners by simulation on the held-back tail of the training recordings
-    tails = [r.slice(int(len(r) * (1 - cfg.val_fraction)), len(r)) for r in train]
+    tail_start = [int(len(r) * (1 - cfg.val_fraction)) for r in train]
 
     def verify(fit):
-        nr, _ = score(system, sim, fit.z, tails, horizon, window)
+        nr, _ = score(system, sim, fit.z, train, horizon, window, first=tail_start)
         return float(np.mean(list(nr.values())))
 
     def refine(fit, err):
@@ -243,10 +250,10 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
     effect_rows.insert(0, sel_row)
 
     # ---- show the fit improve on held-out data -----------------------------------------------------
-    check = held if held else [r.slice(int(len(r) * (1 - cfg.val_fraction)), len(r)) for r in train]
+    check, check_first = (held, None) if held else (train, tail_start)
     z_fit = selected.z
-    nr_b, pb = score(system, sim, z0, check, horizon, window)
-    nr_a, pa = score(system, sim, z_fit, check, horizon, window)
+    nr_b, pb = score(system, sim, z0, check, horizon, window, check_first)
+    nr_a, pa = score(system, sim, z_fit, check, horizon, window, check_first)
     fit = {"metric": f"{cfg.horizon_seconds:g} s predictions from measured states" if cfg.horizon_seconds > 0
            else "open-loop replay",
            "recordings": [r.name for r in check], "before": float(np.mean(list(nr_b.values()))),

@@ -87,8 +87,13 @@ class Simulator:
         return self.sys.effects.init_state()
 
     # ------------------------------------------------------------------------------------------
-    def predict(self, z, qpos, qvel, ctrl, qfrc, horizon: int, stride: int | None = None, chunk: int = 32):
+    def predict(self, z, qpos, qvel, ctrl, qfrc, horizon: int, stride: int | None = None, chunk: int = 32,
+                first: int = 0):
         """Short-horizon predictions from measured states.
+
+        ``first``: the first segment starts there. The effect states (delay line, lag filter,
+        backlash gap) still come from the whole recording: a prediction on a recording's tail
+        must not start a motor lag from rest (what slicing the recording would do).
 
         Segments are simulated ``chunk`` at a time (the last chunk padded), so one compiled
         function serves every recording of a given horizon.
@@ -99,7 +104,7 @@ class Simulator:
         T = len(qpos)
         horizon = int(min(horizon, T - 1))
         stride = stride or horizon
-        starts = np.arange(0, T - horizon, stride)
+        starts = np.arange(min(int(first), max(T - horizon - 1, 0)), T - horizon, stride)
         zj = jnp.asarray(z, jnp.float32)
         es_all = self.effect_states(zj, jnp.asarray(qpos, jnp.float32), jnp.asarray(ctrl, jnp.float32))
         es0 = self.initial_state()
