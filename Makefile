@@ -18,8 +18,10 @@ $(STAMP): pyproject.toml constraints-cpu.txt
 demo: setup
 	$(PY) scripts/diagnose.py out=runs/emps_diagnosis overwrite=true
 
+# two workers (the CI machine has 2 cores), one test file per worker: files share compiled
+# rollouts through module-level caches
 test: setup
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n 2 --dist loadfile
 
 test-slow: setup
 	$(PY) -m pytest -q -m slow

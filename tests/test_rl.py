@@ -1,5 +1,4 @@
 """PPO pieces: GAE against a Python loop, normalisation, and learning on a small task."""
-import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest

@@ -1,7 +1,6 @@
 """Uniform domain randomisation (and fixed physics when the box is empty) around PPO."""
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 
 from sim2real.algos.base import DRConfig, DRSpace
