@@ -145,7 +145,7 @@ def main():
             if label.startswith("oracle_") and label != f"oracle_{name}":
                 continue
             r = evaluate_on(out, TARGETS[name], args.seeds)
-            rows.append({"target": name, "method": label.split("_")[0] if label.startswith("oracle") else label,
+            rows.append({"target": name, "method": method(label),
                          **{f"seed{s}": float(v) for s, v in enumerate(r)}, "mean": float(r.mean())})
             print(rows[-1], flush=True)
         with open(path, "w", newline="") as f:  # after every baseline: a timed-out call keeps the rest

@@ -119,10 +119,13 @@ class Identifier:
         self.cols = {}          # spec name -> full-residual regressor [n, nv]
         self.act_cols = {}      # spec name -> actuator-part regressor (re-computed under grid values)
         for name in self.nominal:
-            kind = self.spec[name].kind
-            parts = ("act",) if kind in ("actuator_gain", "actuator_kv") else ("dyn",)
-            self.cols[name] = idyn.regressor(self.z0, name, _step_for(self.spec, name), parts)
+            self.cols[name] = self._nominal_column(name, self.z0)
         self._r_dyn0 = None
+
+    def _nominal_column(self, name: str, z) -> np.ndarray:
+        """Regressor of a nominal parameter at ``z``: gains act on the actuator part only."""
+        parts = ("act",) if self.spec[name].kind in ("actuator_gain", "actuator_kv") else ("dyn",)
+        return self.idyn.regressor(z, name, _step_for(self.spec, name), parts)
 
     # ------------------------------------------------------------------------------------------
     def column(self, name: str) -> np.ndarray:
@@ -174,19 +177,12 @@ class Identifier:
             return self._fit_at(cand, self.z0, self.r0)
         i = self.spec.index(cand.grid_param)
         fits = []
-        for g in cand.grid:
-            z = self.z0.copy()
-            z[i] = g
-            r = self._grid_residual(cand, z)
-            fits.append(self._fit_at(cand, z, r, regrid=True))
+        fits = [self._fit_grid_point(cand, i, g) for g in cand.grid]
         k = int(np.argmin([f.train_rmse for f in fits]))
         best = self._refine_grid(cand, i, fits[k], cand.grid[max(k - 1, 0)], cand.grid[min(k + 1, len(fits) - 1)])
         if cand.effect == "sensor_offset":
             # the nominal regressors (gravity terms) at the shifted positions, for the final fit
-            z = self.z0.copy()
-            z[i] = best.z[i]
-            best = dataclasses.replace(self._fit_at(cand, z, self._grid_residual(cand, z), regrid=True, fresh=True),
-                                       alternatives=[])
+            best = self._fit_grid_point(cand, i, float(best.z[i]), fresh=True)
         # the grid neighbours of the equation-error optimum, for verification by simulation
         # (smoothing blurs command steps, which biases the equation error by a grid step or so)
         best.alternatives = [fits[j] for j in (k - 1, k + 1) if 0 <= j < len(fits)]
@@ -207,15 +203,19 @@ class Identifier:
 
         def fit_at(g):
             if g not in cache:
-                z = self.z0.copy()
-                z[i] = g
-                cache[g] = self._fit_at(cand, z, self._grid_residual(cand, z), regrid=True)
+                cache[g] = self._fit_grid_point(cand, i, g)
             return cache[g]
 
         res = minimize_scalar(lambda g: fit_at(float(g)).train_rmse, bounds=(lo, hi), method="bounded",
                               options={"maxiter": evals, "xatol": 1e-3 * (hi - lo)})
         f = fit_at(float(res.x))
         return f if f.train_rmse < best.train_rmse else best
+
+    def _fit_grid_point(self, cand: Candidate, i: int, g: float, fresh: bool = False) -> Fit:
+        """The candidate fitted with its grid parameter (index ``i``) held at ``g``."""
+        z = self.z0.copy()
+        z[i] = g
+        return self._fit_at(cand, z, self._grid_residual(cand, z), regrid=True, fresh=fresh)
 
     def _grid_residual(self, cand: Candidate, z):
         """Residual at a grid point: delay, lag, saturation and backlash act on the actuator path
@@ -238,8 +238,7 @@ class Identifier:
         for name in self.nominal:
             kind = self.spec[name].kind
             if fresh:
-                parts = ("act",) if kind in ("actuator_gain", "actuator_kv") else ("dyn",)
-                col = self.idyn.regressor(z, name, _step_for(self.spec, name), parts)
+                col = self._nominal_column(name, z)
             elif regrid and kind in ("actuator_gain", "actuator_kv"):  # gains act through the effect
                 col = self.idyn.regressor(z, name, _step_for(self.spec, name), ("act",))
             else:
