@@ -4,10 +4,13 @@
     python benchmarks/throughput.py --batches 1024,8192,32768,131072 --tag gpu-h100 --no-gym
 
 All three run a uniform random policy. sim2real: jit(scan) of vmapped ``step_autoreset`` with the
-LSDR context (torso size, density, friction, joint damping) drawn uniformly at every reset.
-Brax: ``brax.envs.get_environment('hopper', backend='mjx')`` wrapped for training (vmap, episode,
-auto-reset), as its PPO runs it. Gymnasium: ``Hopper-v5`` (native MuJoCo) as a sync vector env.
-Each figure is the best of 3 timed repeats after a warm-up call (compilation excluded).
+LSDR context (torso size, density, friction, joint damping) drawn uniformly at every reset, the
+env batch split over one CPU device per core (``sim2real.parallel``; on a one-GPU host this is
+the plain single-device run). Brax: ``brax.envs.get_environment('hopper', backend='mjx')``
+wrapped for training (vmap, episode, auto-reset), as its PPO runs it, on one device as shipped
+(``brax_mjx``) and with the same batch split as ours (``brax_mjx_split``); ``sim2real_1dev`` is
+ours on one device. Gymnasium: ``Hopper-v5`` (native MuJoCo) as a sync vector env.
+Each figure is the best of 3 timed repeats after two warm-up calls (compilation excluded).
 Writes ``benchmarks/results/throughput_<tag>.csv`` and ``throughput_<tag>.png``.
 """
 from __future__ import annotations
@@ -22,6 +25,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from sim2real import parallel
+
+parallel.use_cpu_cores()  # before anything runs: one CPU device per core
+
 RESULTS = os.path.join(os.path.dirname(__file__), "results")
 
 
@@ -34,7 +41,14 @@ def time_best(fn, repeats=3):
     return min(ts)
 
 
-def bench_sim2real(batch: int, steps: int) -> float:
+def _timed(roll, carry, extra=()):
+    """Two warm-up calls (the second runs on the first's output layout), then best of 3."""
+    carry = jax.block_until_ready(roll(*carry, *extra, jax.random.PRNGKey(1)))
+    carry = jax.block_until_ready(roll(*carry, *extra, jax.random.PRNGKey(2)))
+    return time_best(lambda: roll(*carry, *extra, jax.random.PRNGKey(3)))
+
+
+def bench_sim2real(batch: int, steps: int, split: bool = True) -> float:
     from sim2real.envs import make
     from sim2real.envs.autoreset import step_autoreset
 
@@ -53,7 +67,10 @@ def bench_sim2real(batch: int, steps: int) -> float:
     state = jax.vmap(env.reset)(keys, z)
     step = jax.vmap(lambda s, zz, a, k: step_autoreset(env, s, zz, a, k, sample)[:2])
 
-    @jax.jit
+    sh = parallel.batch_sharding(batch) if split else None
+    if split:
+        state, z = parallel.shard_batch((state, z))
+
     def roll(state, z, key):
         def f(c, k):
             ka, ks = jax.random.split(k)
@@ -62,29 +79,29 @@ def bench_sim2real(batch: int, steps: int) -> float:
 
         return jax.lax.scan(f, (state, z), jax.random.split(key, steps))[0]
 
-    carry = roll(state, z, jax.random.PRNGKey(1))
-    jax.block_until_ready(carry)
-    return batch * steps / time_best(lambda: roll(*carry, jax.random.PRNGKey(2)))
+    roll = jax.jit(roll, out_shardings=sh) if split else jax.jit(roll)
+    return batch * steps / _timed(roll, (state, z))
 
 
-def bench_brax(batch: int, steps: int) -> float:
+def bench_brax(batch: int, steps: int, split: bool = False) -> float:
     from brax import envs
     from brax.envs.wrappers import training
 
     env = training.wrap(envs.get_environment("hopper", backend="mjx"), episode_length=1000)
     state = jax.jit(env.reset)(jax.random.split(jax.random.PRNGKey(0), batch))
 
-    @jax.jit
+    if split:
+        state = parallel.shard_batch(state)
+
     def roll(state, key):
         def f(s, k):
             a = jax.random.uniform(k, (batch, env.action_size), minval=-1, maxval=1)
             return env.step(s, a), None
 
-        return jax.lax.scan(f, state, jax.random.split(key, steps))[0]
+        return (jax.lax.scan(f, state, jax.random.split(key, steps))[0],)
 
-    state = roll(state, jax.random.PRNGKey(1))
-    jax.block_until_ready(state)
-    return batch * steps / time_best(lambda: roll(state, jax.random.PRNGKey(2)))
+    roll = jax.jit(roll, out_shardings=parallel.batch_sharding(batch)) if split else jax.jit(roll)
+    return batch * steps / _timed(roll, (state,))
 
 
 def bench_gym(batch: int, total_steps: int) -> float:
@@ -117,12 +134,18 @@ def main():
     ap.add_argument("--out", default=RESULTS)
     args = ap.parse_args()
     batches = [int(b) for b in args.batches.split(",")]
-    device = f"{jax.devices()[0].device_kind} ({jax.default_backend()}), {os.cpu_count()} CPU cores, {platform.node()}"
+    device = (f"{jax.devices()[0].device_kind} ({jax.default_backend()}) x {len(jax.devices())}, "
+              f"{os.cpu_count()} CPU cores, {platform.node()}")
     rows = []
     for b in batches:
-        row = {"batch": b, "sim2real": bench_sim2real(b, args.steps)}
+        split = len(parallel.batch_devices(b)) > 1
+        row = {"batch": b, "sim2real": bench_sim2real(b, args.steps, split=split)}
+        if split:
+            row["sim2real_1dev"] = bench_sim2real(b, args.steps, split=False)
         if not args.no_brax:
             row["brax_mjx"] = bench_brax(b, args.steps)
+            if split:
+                row["brax_mjx_split"] = bench_brax(b, args.steps, split=True)
         if not args.no_gym:
             row["gymnasium"] = bench_gym(b, args.gym_steps)
         rows.append(row)
@@ -135,7 +158,7 @@ def main():
 
 def write(rows, args, device):
     os.makedirs(args.out, exist_ok=True)
-    cols = ["batch", "sim2real", "brax_mjx", "gymnasium"]
+    cols = ["batch", "sim2real", "sim2real_1dev", "brax_mjx", "brax_mjx_split", "gymnasium"]
     path = os.path.join(args.out, f"throughput_{args.tag}.csv")
     with open(path, "w", newline="") as f:
         f.write(f"# env-steps/s, hopper, random policy; device: {device}; jax {jax.__version__}\n")
@@ -150,7 +173,8 @@ def write(rows, args, device):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4))
-    for c, style in [("sim2real", "o-"), ("brax_mjx", "s--"), ("gymnasium", "^:")]:
+    for c, style in [("sim2real", "o-"), ("sim2real_1dev", "o:"), ("brax_mjx", "s--"),
+                     ("brax_mjx_split", "s:"), ("gymnasium", "^:")]:
         pts = [(r["batch"], r[c]) for r in rows if c in r]
         if pts:
             ax.loglog(*zip(*sorted(pts)), style, label=c)
