@@ -41,11 +41,11 @@ def time_best(fn, repeats=3):
     return min(ts)
 
 
-def _timed(roll, carry, extra=()):
+def _timed(roll, carry):
     """Two warm-up calls (the second runs on the first's output layout), then best of 3."""
-    carry = jax.block_until_ready(roll(*carry, *extra, jax.random.PRNGKey(1)))
-    carry = jax.block_until_ready(roll(*carry, *extra, jax.random.PRNGKey(2)))
-    return time_best(lambda: roll(*carry, *extra, jax.random.PRNGKey(3)))
+    carry = jax.block_until_ready(roll(*carry, jax.random.PRNGKey(1)))
+    carry = jax.block_until_ready(roll(*carry, jax.random.PRNGKey(2)))
+    return time_best(lambda: roll(*carry, jax.random.PRNGKey(3)))
 
 
 def bench_sim2real(batch: int, steps: int, split: bool = True) -> float:
