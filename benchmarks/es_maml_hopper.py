@@ -7,6 +7,8 @@ friction [0.1, 2.9].
      uniform-DR policy the first kept in the results folder)
     python benchmarks/es_maml_hopper.py --part speed     # meta-iterations/s on this machine
     python benchmarks/es_maml_hopper.py --part plots     # heat maps + table from the saved grid
+    python benchmarks/es_maml_hopper.py --part merge --merge-from DIR   # add DIR's seeds (run with
+                                                         # --seed/--seeds --out DIR), then table + plots
     ... --scale 0.01 --out /tmp/x                        # tiny budgets, to check the script on CPU
 
 Scaled down from seed 004 (device budget): the baselines train ``--steps`` env steps; ES-MAML is
@@ -54,7 +56,7 @@ def train_baseline(label, extra, args):
     from sim2real.train import TrainConfig, train
 
     cfg = config_lib.load(TrainConfig, BASE + [f"name={label}", f"out_dir={args.work}", "overwrite=true",
-                                               f"num_seeds={args.seeds}", f"total_steps={int(args.steps * args.scale)}",
+                                               f"seed={args.seed}", f"num_seeds={args.seeds}", f"total_steps={int(args.steps * args.scale)}",
                                                "updates_per_chunk=20"] + extra)
     t0 = time.time()
     out = train(cfg)
@@ -165,10 +167,11 @@ def part_train(args):
     n = jax.tree_util.tree_leaves(params)[0].shape[0]
     if n != args.seeds:
         raise ValueError(f"the saved uniform-DR policy has {n} seeds; pass --seeds {n}")
-    t0 = time.time()
-    results["udr_mlp+adapt"] = eval_grid_adapted(es, params, stats, key, E)
-    print(f"[udr_mlp+adapt] grid evaluated in {time.time() - t0:.0f} s", flush=True)
-    save()
+    if not (args.resume and "udr_mlp+adapt" in results):  # a resumed run keeps what it evaluated
+        t0 = time.time()
+        results["udr_mlp+adapt"] = eval_grid_adapted(es, params, stats, key, E)
+        print(f"[udr_mlp+adapt] grid evaluated in {time.time() - t0:.0f} s", flush=True)
+        save()
     st = jax.jit(jax.vmap(es.init))(jax.random.split(jax.random.PRNGKey(args.seed), args.seeds), params, stats)
     chunk = max(1, min(args.chunk, args.meta_iters))
 
@@ -196,10 +199,12 @@ def part_train(args):
         print(f"[es_maml] meta-iter {it + chunk}/{args.meta_iters}: fitness {np.mean(m['fitness_mean'][-1]):.1f} "
               f"({dt / chunk:.2f} s/iter)", flush=True)
     mngr.wait_until_finished()
-    with open(os.path.join(args.out, "meta.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(meta_rows[0]))
-        w.writeheader()
-        w.writerows(meta_rows)
+    if meta_rows:  # a run resumed at its last checkpoint has none; keep the earlier meta.csv
+        with open(os.path.join(args.out, "meta.csv" if start == 0 else f"meta_from_{start}.csv"), "w",
+                  newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(meta_rows[0]))
+            w.writeheader()
+            w.writerows(meta_rows)
     theta, stats = jax.vmap(es.policy)(st)  # [S, ...]
     t0 = time.time()
     results["es_maml"] = eval_grid_adapted(es, theta, stats, key, E)
@@ -207,6 +212,10 @@ def part_train(args):
     print(f"[es_maml] grid evaluated in {time.time() - t0:.0f} s", flush=True)
     save()
     steady = times[1:] or times
+    if not steady:
+        table(args.out)
+        plots(args.out)
+        return
     speed = {"device": device, "population": args.population, "seeds": args.seeds,
              "meta_iterations_per_s": 1.0 / float(np.median(steady)),
              "env_steps_per_meta_iteration_per_seed": es.env_steps_per_update()}
@@ -253,6 +262,25 @@ def part_speed(args):
         if new:
             w.writeheader()
         w.writerow(row)
+
+
+def merge(out, others):
+    """Stack the seeds of ``others``' grid.npz onto ``out``'s (kept first as grid_own_seeds.npz)."""
+    path = os.path.join(out, "grid.npz")
+    own = os.path.join(out, "grid_own_seeds.npz")
+    if not os.path.exists(own):
+        os.replace(path, own)
+    grids = [dict(np.load(own))] + [dict(np.load(os.path.join(o, "grid.npz"))) for o in others]
+    methods = [k for k in grids[0] if k not in ("masses", "frictions")]
+    for o, g in zip(others, grids[1:]):
+        missing = set(methods) - set(g)
+        if missing or g["masses"].shape != MASSES.shape or g["frictions"].shape != FRICTIONS.shape:
+            raise ValueError(f"{o}/grid.npz: methods {sorted(missing)} missing or a different test grid")
+    merged = {k: np.concatenate([g[k] for g in grids]) for k in methods}
+    np.savez(path + ".tmp.npz", **merged, masses=MASSES, frictions=FRICTIONS)
+    os.replace(path + ".tmp.npz", path)
+    table(out)
+    plots(out)
 
 
 def in_box_mask():
@@ -309,9 +337,11 @@ def plots(out):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--part", choices=["train", "baselines", "esmaml", "speed", "plots"], default="train")
+    ap.add_argument("--part", choices=["train", "baselines", "esmaml", "speed", "plots", "merge"], default="train")
+    ap.add_argument("--merge-from", nargs="*", default=[],
+                    help="--part merge: results folders of other seeds (same methods) to stack onto --out")
     ap.add_argument("--seeds", type=int, default=3)
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=int, default=0, help="base seed: seeds are split from it (baselines and ES init)")
     ap.add_argument("--steps", type=float, default=20e6)
     ap.add_argument("--scale", type=float, default=1.0)
     ap.add_argument("--meta-iters", type=int, default=100)
@@ -331,6 +361,8 @@ def main():
         part_train(args)
     elif args.part == "speed":
         part_speed(args)
+    elif args.part == "merge":
+        merge(args.out, args.merge_from)
     else:
         table(args.out)
         plots(args.out)

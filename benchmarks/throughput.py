@@ -5,11 +5,11 @@
 
 All three run a uniform random policy. sim2real: jit(scan) of vmapped ``step_autoreset`` with the
 LSDR context (torso size, density, friction, joint damping) drawn uniformly at every reset, the
-env batch split over one CPU device per core (``sim2real.parallel``; on a one-GPU host this is
-the plain single-device run). Brax: ``brax.envs.get_environment('hopper', backend='mjx')``
-wrapped for training (vmap, episode, auto-reset), as its PPO runs it, on one device as shipped
-(``brax_mjx``) and with the same batch split as ours (``brax_mjx_split``); ``sim2real_1dev`` is
-ours on one device. Gymnasium: ``Hopper-v5`` (native MuJoCo) as a sync vector env.
+env batch split over one CPU device per core with ``sim2real.parallel.batch_map`` (on a one-GPU
+host this is the plain single-device run). Brax: ``brax.envs.get_environment('hopper',
+backend='mjx')`` wrapped for training (vmap, episode, auto-reset), as its PPO runs it, on one
+device as shipped (``brax_mjx``) and with the same batch split as ours (``brax_mjx_split``);
+``sim2real_1dev`` is ours on one device. Actions come from per-env keys in every column. Gymnasium: ``Hopper-v5`` (native MuJoCo) as a sync vector env.
 Each figure is the best of 3 timed repeats after two warm-up calls (compilation excluded).
 Writes ``benchmarks/results/throughput_<tag>.csv`` and ``throughput_<tag>.png``.
 """
@@ -43,9 +43,24 @@ def time_best(fn, repeats=3):
 
 def _timed(roll, carry):
     """Two warm-up calls (the second runs on the first's output layout), then best of 3."""
-    carry = jax.block_until_ready(roll(*carry, jax.random.PRNGKey(1)))
-    carry = jax.block_until_ready(roll(*carry, jax.random.PRNGKey(2)))
-    return time_best(lambda: roll(*carry, jax.random.PRNGKey(3)))
+    carry = jax.block_until_ready(roll(*carry))
+    carry = jax.block_until_ready(roll(*carry))
+    return time_best(lambda: roll(*carry))
+
+
+def _random_actions(keys, size):
+    """Per-env uniform actions ``[B, size]`` and the next keys ``[B, 2]`` from per-env keys ``[B, 2]``.
+
+    Per-env keys (not one key for the batch) keep the draws independent of how the batch is split
+    over devices, and let each device draw only its own slice.
+    """
+    keys, ka = jax.vmap(jax.random.split, out_axes=1)(keys)
+    a = jax.vmap(lambda k: jax.random.uniform(k, (size,), minval=-1, maxval=1))(ka)
+    return a, keys
+
+
+def _compile(roll, batch, split):
+    return parallel.batch_map(roll, batch) if split else jax.jit(roll)
 
 
 def bench_sim2real(batch: int, steps: int, split: bool = True) -> float:
@@ -67,20 +82,16 @@ def bench_sim2real(batch: int, steps: int, split: bool = True) -> float:
     state = jax.vmap(env.reset)(keys, z)
     step = jax.vmap(lambda s, zz, a, k: step_autoreset(env, s, zz, a, k, sample)[:2])
 
-    sh = parallel.batch_sharding(batch) if split else None
-    if split:
-        state, z = parallel.shard_batch((state, z))
+    def roll(state, z, keys):
+        def f(c, _):
+            s, zz, k = c
+            a, k = _random_actions(k, env.action_size)
+            k, ks = jax.vmap(jax.random.split, out_axes=1)(k)
+            return (*step(s, zz, a, ks), k), None
 
-    def roll(state, z, key):
-        def f(c, k):
-            ka, ks = jax.random.split(k)
-            a = jax.random.uniform(ka, (batch, env.action_size), minval=-1, maxval=1)
-            return step(*c, a, jax.random.split(ks, batch)), None
+        return jax.lax.scan(f, (state, z, keys), None, length=steps)[0]
 
-        return jax.lax.scan(f, (state, z), jax.random.split(key, steps))[0]
-
-    roll = jax.jit(roll, out_shardings=sh) if split else jax.jit(roll)
-    return batch * steps / _timed(roll, (state, z))
+    return batch * steps / _timed(_compile(roll, batch, split), (state, z, keys))
 
 
 def bench_brax(batch: int, steps: int, split: bool = False) -> float:
@@ -89,19 +100,17 @@ def bench_brax(batch: int, steps: int, split: bool = False) -> float:
 
     env = training.wrap(envs.get_environment("hopper", backend="mjx"), episode_length=1000)
     state = jax.jit(env.reset)(jax.random.split(jax.random.PRNGKey(0), batch))
+    keys = jax.random.split(jax.random.PRNGKey(1), batch)
 
-    if split:
-        state = parallel.shard_batch(state)
+    def roll(state, keys):
+        def f(c, _):
+            s, k = c
+            a, k = _random_actions(k, env.action_size)
+            return (env.step(s, a), k), None
 
-    def roll(state, key):
-        def f(s, k):
-            a = jax.random.uniform(k, (batch, env.action_size), minval=-1, maxval=1)
-            return env.step(s, a), None
+        return jax.lax.scan(f, (state, keys), None, length=steps)[0]
 
-        return (jax.lax.scan(f, state, jax.random.split(key, steps))[0],)
-
-    roll = jax.jit(roll, out_shardings=parallel.batch_sharding(batch)) if split else jax.jit(roll)
-    return batch * steps / _timed(roll, (state,))
+    return batch * steps / _timed(_compile(roll, batch, split), (state, keys))
 
 
 def bench_gym(batch: int, total_steps: int) -> float:

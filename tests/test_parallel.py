@@ -29,6 +29,26 @@ SCRIPT = textwrap.dedent("""
     split = jax.jit(roll, out_shardings=sh)(*parallel.shard_batch((state, z)))
     assert len(split.obs.sharding.device_set) == 2, split.obs.sharding
     np.testing.assert_allclose(np.asarray(split.obs), np.asarray(one.obs), rtol=1e-5, atol=1e-6)
+
+    # batch_map: each device rolls its own slice out (per-env keys draw the actions), same result
+    def roll_keys(state, z, keys):
+        def f(c, _):
+            s, k = c
+            k, ka = jax.vmap(jax.random.split, out_axes=1)(k)
+            a = jax.vmap(lambda kk: jax.random.uniform(kk, (env.action_size,), minval=-1, maxval=1))(ka)
+            return (jax.vmap(env.step)(s, a, z), k), None
+        s, k = jax.lax.scan(f, (state, keys), None, length=30)[0]
+        return s, z, k
+
+    one_k = jax.jit(roll_keys)(state, z, keys)
+    mapped = parallel.batch_map(roll_keys, B)
+    split_k = mapped(state, z, keys)
+    assert len(split_k[0].obs.sharding.device_set) == 2, split_k[0].obs.sharding
+    np.testing.assert_allclose(np.asarray(split_k[0].obs), np.asarray(one_k[0].obs), rtol=1e-5, atol=1e-6)
+    assert not np.allclose(np.asarray(split_k[0].obs), np.asarray(state.obs))  # it did move
+    again = mapped(*split_k)                        # outputs feed back in
+    np.testing.assert_allclose(np.asarray(again[0].obs), np.asarray(jax.jit(roll_keys)(*one_k)[0].obs),
+                               rtol=1e-5, atol=1e-6)
     assert len(parallel.batch_devices(3)) == 1      # an odd batch stays on one device
     try:
         parallel.shard_batch({"a": jnp.zeros(4), "b": jnp.zeros(3)})
