@@ -212,15 +212,12 @@ def part_train(args):
     print(f"[es_maml] grid evaluated in {time.time() - t0:.0f} s", flush=True)
     save()
     steady = times[1:] or times
-    if not steady:
-        table(args.out)
-        plots(args.out)
-        return
-    speed = {"device": device, "population": args.population, "seeds": args.seeds,
-             "meta_iterations_per_s": 1.0 / float(np.median(steady)),
-             "env_steps_per_meta_iteration_per_seed": es.env_steps_per_update()}
-    with open(os.path.join(args.out, "speed_train.json"), "w") as f:
-        json.dump(speed, f, indent=2)
+    if steady:  # none when resumed at the last checkpoint: keep the earlier speed_train.json
+        speed = {"device": device, "population": args.population, "seeds": args.seeds,
+                 "meta_iterations_per_s": 1.0 / float(np.median(steady)),
+                 "env_steps_per_meta_iteration_per_seed": es.env_steps_per_update()}
+        with open(os.path.join(args.out, "speed_train.json"), "w") as f:
+            json.dump(speed, f, indent=2)
     table(args.out)
     plots(args.out)
 

@@ -9,7 +9,8 @@ env batch split over one CPU device per core with ``sim2real.parallel.batch_map`
 host this is the plain single-device run). Brax: ``brax.envs.get_environment('hopper',
 backend='mjx')`` wrapped for training (vmap, episode, auto-reset), as its PPO runs it, on one
 device as shipped (``brax_mjx``) and with the same batch split as ours (``brax_mjx_split``);
-``sim2real_1dev`` is ours on one device. Actions come from per-env keys in every column. Gymnasium: ``Hopper-v5`` (native MuJoCo) as a sync vector env.
+``sim2real_1dev`` is ours on one device. Actions come from per-env keys in every column.
+Gymnasium: ``Hopper-v5`` (native MuJoCo) as a sync vector env.
 Each figure is the best of 3 timed repeats after two warm-up calls (compilation excluded).
 Writes ``benchmarks/results/throughput_<tag>.csv`` and ``throughput_<tag>.png``.
 """
@@ -48,13 +49,18 @@ def _timed(roll, carry):
     return time_best(lambda: roll(*carry))
 
 
+def _split(keys, n=2):
+    """``n`` key arrays ``[B, 2]`` from per-env keys ``[B, 2]``."""
+    return jax.vmap(lambda k: jax.random.split(k, n), out_axes=1)(keys)
+
+
 def _random_actions(keys, size):
     """Per-env uniform actions ``[B, size]`` and the next keys ``[B, 2]`` from per-env keys ``[B, 2]``.
 
     Per-env keys (not one key for the batch) keep the draws independent of how the batch is split
     over devices, and let each device draw only its own slice.
     """
-    keys, ka = jax.vmap(jax.random.split, out_axes=1)(keys)
+    keys, ka = _split(keys)
     a = jax.vmap(lambda k: jax.random.uniform(k, (size,), minval=-1, maxval=1))(ka)
     return a, keys
 
@@ -86,7 +92,7 @@ def bench_sim2real(batch: int, steps: int, split: bool = True) -> float:
         def f(c, _):
             s, zz, k = c
             a, k = _random_actions(k, env.action_size)
-            k, ks = jax.vmap(jax.random.split, out_axes=1)(k)
+            k, ks = _split(k)
             return (*step(s, zz, a, ks), k), None
 
         return jax.lax.scan(f, (state, z, keys), None, length=steps)[0]

@@ -11,7 +11,8 @@ Two ways, for two kinds of function:
   policy, physics sweeps). Each device runs ``fn`` on its own slice (``jax.shard_map``), so
   data-dependent loops (MJX's solver iterations, ``while_loop``) stop when *that slice* has
   converged instead of waiting on a cross-device reduction every iteration. The faster of the two
-  (hopper, 2 cores: 45k vs 30k env-steps/s at 4,096 envs).
+  (hopper, 2 cores, one-off measurement outside the committed benchmark: 45k vs 30k env-steps/s
+  at 4,096 envs).
 * ``shard_batch`` + ``jax.jit(..., out_shardings=batch_sharding(batch))`` -- for anything, including
   functions that reduce over the batch (a PPO update): XLA's partitioner inserts the
   communication.
@@ -94,12 +95,12 @@ def batch_map(fn: Callable, batch: int) -> Callable:
     if len(devs) == 1:
         return jax.jit(fn)
     spec = PartitionSpec("batch")
+    mesh = Mesh(devs, ("batch",))
     # check_vma=False: MJX's solver runs lax.cond inside scans whose branches return values that
     # are not marked per-device, which the varying-axes check rejects; each slice's loop is
     # independent here by construction (fn treats envs independently).
-    mapped = jax.jit(jax.shard_map(fn, mesh=Mesh(devs, ("batch",)), in_specs=spec, out_specs=spec,
-                                   check_vma=False))
-    sharding = batch_sharding(batch)
+    mapped = jax.jit(jax.shard_map(fn, mesh=mesh, in_specs=spec, out_specs=spec, check_vma=False))
+    sharding = NamedSharding(mesh, spec)
 
     def run(*args):
         # a no-op for arguments already split this way (a previous call's outputs)
