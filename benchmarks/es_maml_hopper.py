@@ -265,14 +265,15 @@ def merge(out, others):
     """Stack the seeds of ``others``' grid.npz onto ``out``'s (kept first as grid_own_seeds.npz)."""
     path = os.path.join(out, "grid.npz")
     own = os.path.join(out, "grid_own_seeds.npz")
-    if not os.path.exists(own):
-        os.replace(path, own)
-    grids = [dict(np.load(own))] + [dict(np.load(os.path.join(o, "grid.npz"))) for o in others]
+    grids = [dict(np.load(own if os.path.exists(own) else path))]
+    grids += [dict(np.load(os.path.join(o, "grid.npz"))) for o in others]
     methods = [k for k in grids[0] if k not in ("masses", "frictions")]
     for o, g in zip(others, grids[1:]):
         missing = set(methods) - set(g)
         if missing or g["masses"].shape != MASSES.shape or g["frictions"].shape != FRICTIONS.shape:
             raise ValueError(f"{o}/grid.npz: methods {sorted(missing)} missing or a different test grid")
+    if not os.path.exists(own):  # only once the inputs are known good: nothing half-moved on error
+        os.replace(path, own)
     merged = {k: np.concatenate([g[k] for g in grids]) for k in methods}
     np.savez(path + ".tmp.npz", **merged, masses=MASSES, frictions=FRICTIONS)
     os.replace(path + ".tmp.npz", path)
