@@ -6,13 +6,15 @@ the Gaussian run, learned vs fixed DR at test time, EPOpt with learned vs unifor
     python benchmarks/lsdr_hopper.py --part transfer   # Fig. 8: LSDR vs fixed DR, fine-tuned on the test range
     python benchmarks/lsdr_hopper.py --part epopt      # Fig. 9: EPOpt-PPO with learned vs uniform DR
     python benchmarks/lsdr_hopper.py --part plots      # figures from the saved results (CPU)
+    python benchmarks/lsdr_hopper.py --part table      # learned-range table from the saved results (CPU)
     ... --scale 0.02                                   # tiny budgets, to check the script on CPU
 
 Each part writes ``benchmarks/results/lsdr_hopper/<part>.npz`` / ``.csv`` (and ``--part plots``
 the PNGs). Every run trains ``--seeds`` seeds in one ``jit(vmap(scan))`` through the same
 algorithm objects as ``scripts/train.py``. Priors are the paper's Table I boxes; values below a
 parameter's physical lower bound (negative sizes, friction, damping) are clipped to it in the
-simulator (README, bounds rule), as the paper's simulator did implicitly.
+simulator (README, bounds rule); with ``--out-of-bounds terminate`` such a context is a robot that
+cannot exist instead: its episodes end at the first step with reward 0.
 """
 from __future__ import annotations
 
@@ -44,11 +46,15 @@ BASE = [  # GPU scale: 4096 envs x 16 steps per PPO update
 ]
 
 
+OUT_OF_BOUNDS = "clip"  # --out-of-bounds: the env's rule for physics outside the parameter bounds
+
+
 def config(extra: list[str], steps: float, scale: float, seeds: int):
     from sim2real import config as config_lib
     from sim2real.train import TrainConfig
 
-    args = BASE + [f"total_steps={int(steps * scale)}", f"num_seeds={seeds}"] + extra
+    args = BASE + [f"env_options.out_of_bounds={OUT_OF_BOUNDS}", f"total_steps={int(steps * scale)}",
+                   f"num_seeds={seeds}"] + extra
     if scale < 1:  # CPU check of the script
         args += ["ppo.num_envs=64", "ppo.num_steps=16", "algo_options.num_contexts=8", "algo_options.eval_horizon=50"]
     return config_lib.load(TrainConfig, args)
@@ -130,6 +136,42 @@ def uniform_fit(centers, p):
     return m - np.sqrt(3) * s, m + np.sqrt(3) * s
 
 
+def quantile_range(centers, p, q=0.05):
+    """Central ``1 - 2q`` probability range of a binned distribution (bin centres)."""
+    cdf = np.cumsum(p)
+    return float(centers[np.searchsorted(cdf, q)]), float(centers[min(np.searchsorted(cdf, 1 - q), len(centers) - 1)])
+
+
+def part_table(a, log):
+    """Per parameter, from the saved ``ranges_<name>.npz`` in ``--out``: the moment-matched uniform,
+    the central 90% range and the probability p_phi puts on values below the physical lower bound
+    (robots that cannot exist), mean over seeds; written to ``ranges_table.csv``."""
+    from sim2real.envs import make
+
+    spec = make("hopper").spec
+    rows = []
+    for name, (prior, conv) in TABLE_I.items():
+        path = os.path.join(a.out, f"ranges_{name}.npz")
+        if not os.path.exists(path):
+            continue
+        d = np.load(path)
+        p = d["probs"][-1][:, 0]  # [S, bins] at the end of training
+        centers = (d["edges"][1:] + d["edges"][:-1]) / 2
+        low = float(spec.low[spec.index(name)])
+        mm = np.mean([uniform_fit(centers, q) for q in p], 0)
+        qr = np.mean([quantile_range(centers, q) for q in p], 0)
+        rows.append({"parameter": name, "prior_low": prior[0], "prior_high": prior[1],
+                     "paper_low": conv[0], "paper_high": conv[1], "moment_low": mm[0], "moment_high": mm[1],
+                     "q05": qr[0], "q95": qr[1], "physical_low": low,
+                     "prior_mass_below_physical": float(np.mean(centers < low)),
+                     "p_phi_mass_below_physical": float(np.mean([q[centers < low].sum() for q in p]))})
+        r = rows[-1]
+        log(f"{name}: moment-matched [{mm[0]:.4g}, {mm[1]:.4g}], 5-95% [{qr[0]:.4g}, {qr[1]:.4g}], "
+            f"mass below {low:g}: {r['p_phi_mass_below_physical']:.3f} (prior {r['prior_mass_below_physical']:.2f}); "
+            f"paper {conv}")
+    write_csv(os.path.join(a.out, "ranges_table.csv"), rows)
+
+
 def write_csv(path, rows):
     keys = list(dict.fromkeys(k for r in rows for k in r if k != "test_grid"))
     with open(path, "w", newline="") as f:
@@ -156,6 +198,7 @@ def part_ranges(a, log):
         fits = [uniform_fit(centers, probs[-1, s, 0]) for s in range(probs.shape[1])]
         summary[name] = {"prior": prior, "paper_converged": conv, "learned_per_seed": fits,
                          "learned_mean": np.mean(fits, 0).tolist(), "learned_std": np.std(fits, 0).tolist(),
+                         "out_of_bounds": OUT_OF_BOUNDS,
                          "final_train_return": rows[-1]["train_return"], "env_steps": rows[-1]["env_steps"],
                          "wall_seconds": rows[-1]["wall_seconds"]}
         np.savez(os.path.join(a.out, f"ranges_{name}.npz"), probs=probs, edges=edges,
@@ -299,7 +342,7 @@ def part_plots(a, log):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--part", required=True, choices=["ranges", "gaussian", "transfer", "epopt", "plots"])
+    ap.add_argument("--part", required=True, choices=["ranges", "gaussian", "transfer", "epopt", "plots", "table"])
     ap.add_argument("--only", default="", help="ranges: one parameter")
     ap.add_argument("--steps", type=float, default=30e6, help="env steps per seed per run")
     ap.add_argument("--ft-steps", dest="ft_steps", type=float, default=10e6)
@@ -313,15 +356,21 @@ def main():
     ap.add_argument("--scale", type=float, default=1.0)
     ap.add_argument("--algos", default="lsdr,fixed_dr", help="transfer/epopt: which runs (comma-separated)")
     ap.add_argument("--out", default=OUT)
+    ap.add_argument("--out-of-bounds", dest="out_of_bounds", default="clip", choices=["clip", "terminate"],
+                    help="physics outside the parameters' bounds: simulate the bound, or end the episode "
+                         "at once with reward 0 (the paper's simulator: negative sizes/masses fail)")
     a = ap.parse_args()
+    global OUT_OF_BOUNDS
+    OUT_OF_BOUNDS = a.out_of_bounds
     os.makedirs(a.out, exist_ok=True)
     import jax
 
     t0 = time.time()
     log = lambda s: print(f"[{time.time() - t0:6.0f}s] {s}", flush=True)  # noqa: E731
-    log(f"device: {jax.devices()[0].device_kind}; part {a.part}")
+    log(f"device: {jax.devices()[0].device_kind}; part {a.part}; out_of_bounds={a.out_of_bounds}; "
+        f"args {vars(a)}")
     {"ranges": part_ranges, "gaussian": part_gaussian, "transfer": part_transfer,
-     "epopt": lambda a, log: part_transfer(a, log, "epopt"), "plots": part_plots}[a.part](a, log)
+     "epopt": lambda a, log: part_transfer(a, log, "epopt"), "plots": part_plots, "table": part_table}[a.part](a, log)
     log("done")
 
 

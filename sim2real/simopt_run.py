@@ -37,6 +37,8 @@ class SimOptRunConfig:
 
     Attributes:
       name, out_dir, seed, num_seeds, resume, overwrite, progress: as ``TrainConfig``.
+      max_iterations: stop after this many SimOpt iterations in this invocation (0: run to the
+        end); ``resume=true`` continues (``real=target``).
       env, env_options: the simulator (and, sim-to-sim, the target) env.
       real: ``target`` | ``recordings``.
       target: hidden physics of the target env, ``{param: value}`` (``real=target``).
@@ -58,6 +60,7 @@ class SimOptRunConfig:
     resume: bool = False
     overwrite: bool = False
     progress: bool = True
+    max_iterations: int = 0
     ppo: PPOConfig = PPOConfig()
     dr: DRConfig = DRConfig()
     simopt: SimOptConfig = SimOptConfig()
@@ -98,34 +101,36 @@ def run(cfg: SimOptRunConfig) -> dict:
         state, start = checkpoint.restore(mngr, step, state), step
     dist_path = os.path.join(rd.dir, "distribution.npz")
     hist = dict(np.load(dist_path)) if start and os.path.exists(dist_path) else {}
-    hist = {k: v[:start] for k, v in hist.items()}
+    # per-iteration history only (the file also holds final_mean/final_cov/names, rewritten below)
+    hist = {k: hist[k][:start] for k in ("mean", "cov") if k in hist}
 
     if cfg.real == "target":
         zt = jnp.asarray(z_target)
-        it_first = jax.jit(jax.vmap(lambda s: so.iteration(s, zt, first=True)))
-        it_next = jax.jit(jax.vmap(lambda s: so.iteration(s, zt)))
+        # one compiled function for every iteration: the update count is an argument, not a shape
+        it_fn = jax.jit(jax.vmap(lambda s, n: so.iteration(s, zt, num_updates=n), in_axes=(0, None)))
+        n_updates = so.updates_for
         total = cfg.simopt.iterations + 1  # the last one trains and evaluates on the final distribution
     else:
-        def hw(s, first):
-            n = (cfg.simopt.init_ppo_updates or cfg.simopt.ppo_updates) if first else 0
-            if n:  # the very first call: the policy that produced the recordings is trained first
-                s, _ = so.train(s, n)
+        def hw(s, n):
+            # n > 0 only on the very first call: the policy that produced the recordings is trained first
+            s, _ = so.train(s, n)
             mean, cov = s.mean, s.cov
             s, info = so.adapt(s, real_rec)
             s, tm = so.train(s, cfg.simopt.ppo_updates)
             return s, dict(mean=mean, cov=cov, target_return=jnp.nan, eval_return=jnp.nan, **tm,
                            **{f"reps_{k}": v for k, v in info.items()})
 
-        it_first = jax.jit(jax.vmap(lambda s: hw(s, True)))
-        it_next = jax.jit(jax.vmap(lambda s: hw(s, False)))
+        it_fn = jax.jit(jax.vmap(hw, in_axes=(0, None)))
+        n_updates = lambda first: so.updates_for(True) if first else 0
         total = start + 1
     rows = []
     names = so.space.names
     bar = _bar(cfg.progress, total, start)
+    end = total if not cfg.max_iterations else min(total, start + cfg.max_iterations)
     try:
-        for i in range(start, total):
+        for i in range(start, end):
             t0 = time.perf_counter()
-            state, m = (it_first if i == 0 else it_next)(state)
+            state, m = it_fn(state, jnp.int32(n_updates(i == 0)))
             m = jax.tree_util.tree_map(np.asarray, m)
             for k in ("mean", "cov"):
                 hist[k] = np.concatenate([hist.get(k, np.zeros((0,) + m[k].shape)), m[k][None]])

@@ -63,3 +63,31 @@ def test_subspace_expand_take_roundtrip():
     np.testing.assert_array_equal(rest, np.delete(spec.default, sub.idx))
     with pytest.raises(KeyError):
         Subspace(spec, ("torso",))
+
+
+def test_out_of_bounds_terminate_rule():
+    """``out_of_bounds='terminate'``: a z outside the bounds ends the episode at its first step with
+    reward 0 (counted as diverged); inside the bounds it steps exactly as the default ``clip`` env."""
+    import jax
+    import jax.numpy as jnp
+
+    with pytest.raises(ValueError, match="out_of_bounds='drop'.*terminate"):
+        make("pendulum", out_of_bounds="drop")
+    clip_env, term_env = env_for("pendulum"), make("pendulum", out_of_bounds="terminate")
+    inside = jnp.asarray(clip_env.default_z())
+    outside = inside.at[clip_env.spec.index("joint_damping")].set(-0.5)
+    act = jnp.array([0.3])
+
+    def one(env, z):
+        s = env.reset(jax.random.PRNGKey(0), z)
+        return env.step(s, act, z)
+
+    a, b = jax.jit(lambda z: one(clip_env, z))(inside), jax.jit(lambda z: one(term_env, z))(inside)
+    for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b)):
+        np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+    assert not bool(b.terminated)
+    c = jax.jit(lambda z: one(clip_env, z))(outside)  # clipped to damping 0: simulates on
+    d = jax.jit(lambda z: one(term_env, z))(outside)
+    assert not bool(c.terminated) and float(c.metrics["diverged"]) == 0.0
+    assert bool(d.terminated) and not bool(d.truncated)
+    assert float(d.reward) == 0.0 and float(d.metrics["diverged"]) == 1.0

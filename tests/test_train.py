@@ -79,3 +79,24 @@ def test_load_run_for_evaluation(tmp_path):
     train(tiny(tmp_path, "name=ev"))
     cfg, env, algo, state = load_run(str(tmp_path / "ev"))
     assert cfg.name == "ev" and int(state.update_step[0]) == 8
+
+
+def test_checkpoint_restore_places_leaves_like_the_template(tmp_path):
+    """Restored leaves match the template's dtype and commitment, so a jitted step that took the
+    template does not compile again for the restored state (a resumed run compiled its chunk twice)."""
+    from sim2real import checkpoint
+
+    step = jax.jit(lambda s: jax.tree_util.tree_map(lambda x: x + 1, s))
+    template = jax.jit(lambda: {"w": jax.numpy.zeros((2, 3)), "n": jax.numpy.zeros((), jax.numpy.int32),
+                                "empty": jax.numpy.zeros((0,))})()
+    state = step(template)
+    mngr = checkpoint.manager(str(tmp_path / "ck"))
+    checkpoint.save(mngr, 1, state)
+    mngr.wait_until_finished()
+    restored = checkpoint.restore(mngr, 1, template)
+    for a, b in zip(jax.tree_util.tree_leaves(state), jax.tree_util.tree_leaves(restored)):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+        assert a.dtype == b.dtype and a.committed == b.committed
+    before = step._cache_size()
+    step(restored)
+    assert step._cache_size() == before

@@ -161,11 +161,22 @@ class SimOpt:
         cov = jnp.diag(jnp.asarray(self.init_std) ** 2)
         return SimOptState(self.ppo.init(k_ppo, self.sampler(mean, cov)), mean, cov, k_next)
 
-    def train(self, st: SimOptState, num_updates: int) -> tuple[SimOptState, dict]:
-        """``num_updates`` PPO updates on the current distribution (warm start)."""
+    def train(self, st: SimOptState, num_updates) -> tuple[SimOptState, dict]:
+        """``num_updates`` PPO updates on the current distribution (warm start).
+
+        ``num_updates`` may be a Python int or a traced int32 scalar: a traced count lets the
+        first SimOpt iteration (more updates) and the later ones share one compiled function.
+        ``train_return`` is the last update's mean episode return (NaN after 0 updates).
+        """
         sample = self.sampler(st.mean, st.cov)
-        ppo_st, m = jax.lax.scan(lambda s, _: self.ppo.update(s, sample), st.ppo, None, length=num_updates)
-        return st.replace(ppo=ppo_st), {"train_return": m["episode_return"][-1]}
+
+        def body(_, c):
+            s, _ret = c
+            s, m = self.ppo.update(s, sample)
+            return s, m["episode_return"].astype(jnp.float32)
+
+        ppo_st, ret = jax.lax.fori_loop(0, num_updates, body, (st.ppo, jnp.full((), jnp.nan, jnp.float32)))
+        return st.replace(ppo=ppo_st), {"train_return": ret}
 
     # ---------------------------------------------------------------------- rollouts ----
     def rollout(self, params, obs_stats, z, key, qpos0, qvel0, goal):
@@ -249,15 +260,18 @@ class SimOpt:
         return jax.lax.scan(lambda s, _: self.reps_step(s, real), st, None, length=self.cfg.reps_updates)
 
     # --------------------------------------------------------------------- iteration ----
-    def iteration(self, st: SimOptState, z_target, first: bool = False):
+    def iteration(self, st: SimOptState, z_target, first: bool = False, num_updates=None):
         """Train, roll out on the target, adapt. Returns ``(state, metrics)``.
+
+        ``num_updates`` (int or traced int32 scalar) overrides the PPO update count that
+        ``first`` selects (``init_ppo_updates`` for the first iteration, else ``ppo_updates``).
 
         ``metrics``: ``mean [D]``, ``cov [D, D]`` (the distribution the policy was trained on),
         ``target_return`` (mean over the real rollouts), ``eval_return`` (``eval_episodes`` extra
         target episodes, NaN when 0), REPS ``eta``/``kl``/``ess``/costs per update.
         """
         cfg = self.cfg
-        n = (cfg.init_ppo_updates or cfg.ppo_updates) if first else cfg.ppo_updates
+        n = self.updates_for(first) if num_updates is None else num_updates
         mean, cov = st.mean, st.cov
         st, tm = self.train(st, n)
         key, k_real, k_eval = jax.random.split(st.key, 3)
@@ -271,6 +285,10 @@ class SimOpt:
         metrics = dict(mean=mean, cov=cov, target_return=real.ret.mean(), eval_return=ev, **tm,
                        **{f"reps_{k}": v for k, v in info.items()})
         return st, metrics
+
+    def updates_for(self, first: bool) -> int:
+        """PPO updates in an iteration: ``init_ppo_updates`` (or ``ppo_updates``) for the first."""
+        return (self.cfg.init_ppo_updates or self.cfg.ppo_updates) if first else self.cfg.ppo_updates
 
     def policy(self, st: SimOptState):
         return st.ppo.params, st.ppo.obs_stats

@@ -66,6 +66,9 @@ class State:
     metrics: dict[str, jax.Array]
 
 
+OUT_OF_BOUNDS = ("clip", "terminate")
+
+
 @dataclasses.dataclass(frozen=True)
 class EnvConfig:
     """Static env settings (any of them can be overridden in ``make(name, **overrides)``).
@@ -78,6 +81,10 @@ class EnvConfig:
       ls_iterations: solver line-search iterations (None: the XML's).
       max_delay: length of the action-delay buffer in control steps.
       coulomb_eps: velocity scale of the smooth Coulomb friction model.
+      out_of_bounds: what a physics vector outside the parameters' physical bounds does inside
+        ``jit``: ``clip`` (simulate the nearest bound; the default) or ``terminate`` (the robot
+        cannot exist: the episode ends at its first step with reward 0 and counts as diverged,
+        as negative masses or sizes did in the simulator of the LSDR paper).
     """
 
     episode_length: int = 1000
@@ -87,6 +94,7 @@ class EnvConfig:
     ls_iterations: int | None = None
     max_delay: int = 4
     coulomb_eps: float = 1e-3
+    out_of_bounds: str = "clip"
 
 
 class Env:
@@ -106,6 +114,9 @@ class Env:
                 f"options: {[f.name for f in dataclasses.fields(EnvConfig)]}"
             )
         self.config = dataclasses.replace(cfg, **overrides)
+        if self.config.out_of_bounds not in OUT_OF_BOUNDS:
+            raise ValueError(f"env '{self.name}': out_of_bounds={self.config.out_of_bounds!r}; "
+                             f"choose one of {list(OUT_OF_BOUNDS)}")
         self.mj_model = self.load_model()
         spec_params = self.declare_params(self.mj_model) + catalog.common_params(self.mj_model, self.config.max_delay)
         self.spec = ParamSpec(spec_params)
@@ -180,6 +191,7 @@ class Env:
 
     def step(self, state: State, action: jax.Array, z: jax.Array) -> State:
         """Advance one control step (``frame_skip`` physics steps) under physics ``z [P]``."""
+        valid = self.spec_valid(z)
         z = clip(self.spec, z)
         model = self.physics.apply(z)
         data0 = state.data
@@ -188,7 +200,7 @@ class Env:
                                     self.config.frame_skip)
 
         ok = (jnp.all(jnp.abs(data.qpos) < MAX_STATE) & jnp.all(jnp.abs(data.qvel) < MAX_STATE)
-              & jnp.isfinite(data.qacc).all())
+              & jnp.isfinite(data.qacc).all() & valid)
         data = jax.tree_util.tree_map(lambda new, old: jnp.where(ok, new, old), data, data0)
         k_sense, k_next = jax.random.split(state.key)
         obs = self._observe(z, data, state.goal, k_sense)
@@ -200,6 +212,12 @@ class Env:
             terminated=terminated | ~ok, truncated=(t >= self.config.episode_length) & ok & ~terminated,
             effects=eff, t=t, key=k_next, metrics=metrics,
         )
+
+    def spec_valid(self, z: jax.Array) -> jax.Array:
+        """``[]`` bool: False only when ``out_of_bounds='terminate'`` and ``z`` leaves the bounds."""
+        if self.config.out_of_bounds == "clip":
+            return jnp.ones((), bool)
+        return jnp.all((z >= self.spec.low) & (z <= self.spec.high))
 
     def _observe(self, z, data, goal, key):
         k1, k2 = jax.random.split(key)

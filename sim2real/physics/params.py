@@ -12,6 +12,8 @@ Bounds rule (documented in the README):
 * Inside ``jit`` (where nothing can raise) :func:`clip` **clips** every entry to its bounds before
   the physics sees it. A DR distribution whose support reaches past the bounds (the LSDR paper's
   Table I ranges include negative damping) therefore simulates the bound, never the impossible value.
+  An env made with ``out_of_bounds="terminate"`` instead ends such an episode at its first step
+  (``Env.spec_valid``), so a learned distribution can see that the value is impossible.
 """
 from __future__ import annotations
 
