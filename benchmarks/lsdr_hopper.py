@@ -190,7 +190,8 @@ def part_ranges(a, log):
         cfg = config([f"name=lsdr_{name}", "algo=lsdr", f"dr.params=[{name}]", f"dr.low=[{prior[0]}]",
                       f"dr.high=[{prior[1]}]", "algo_options.dist=binned", "algo_options.num_bins=100",
                       f"algo_options.num_contexts={a.contexts}", f"algo_options.dist_every={a.dist_every}",
-                      f"algo_options.dist_start={a.dist_start}", f"updates_per_chunk={a.chunk}"],
+                      f"algo_options.dist_start={a.dist_start}", f"updates_per_chunk={a.chunk}",
+                      f"algo_options.alpha={a.alpha}"],
                      a.steps, a.scale, a.seeds)
         _, rows, probs, _, _, _ = run(cfg, log=log)
         edges = np.linspace(prior[0], prior[1], probs.shape[-1] + 1)
@@ -218,14 +219,14 @@ def part_gaussian(a, log):
     hi = [TABLE_I[n][0][1] for n in names]
     log("LSDR full-covariance Gaussian over the 4-D Table I box")
     cfg = config(["name=lsdr_gauss", "algo=lsdr", f"dr.params=[{','.join(names)}]", f"dr.low={lo}", f"dr.high={hi}",
-                  "algo_options.dist=gaussian", f"algo_options.num_contexts={a.contexts}",
+                  "algo_options.dist=gaussian", f"algo_options.num_contexts={a.contexts}", f"algo_options.alpha={a.alpha}",
                   f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
                   f"updates_per_chunk={a.chunk}"], a.steps, a.scale, a.seeds)
     _, rows, _, dists, _, _ = run(cfg, log=log)
-    np.savez(os.path.join(a.out, "gaussian.npz"), names=np.array(names), low=np.array(lo), high=np.array(hi),
+    np.savez(os.path.join(a.out, f"gaussian{a.tag}.npz"), names=np.array(names), low=np.array(lo), high=np.array(hi),
              mean=np.stack([d[0] for d in dists]), cov=np.stack([d[1] for d in dists]),
              env_steps=np.array([r["env_steps"] for r in rows]))
-    write_csv(os.path.join(a.out, "gaussian.csv"), rows)
+    write_csv(os.path.join(a.out, f"gaussian{a.tag}.csv"), rows)
 
 
 def part_transfer(a, log, optimizer="ppo"):
@@ -283,7 +284,7 @@ def part_plots(a, log):
             ax.set_xlabel("env steps [M]")
         fig.tight_layout()
         fig.savefig(os.path.join(a.out, "evolution.png"), dpi=110)
-    gp = os.path.join(a.out, "gaussian.npz")
+    gp = os.path.join(a.out, f"gaussian{a.tag}.npz")
     if os.path.exists(gp):  # Fig. 1d / 6: Gaussian marginals over time and final 2-sigma ellipses
         d = np.load(gp)
         names_g, mean, cov = list(d["names"]), d["mean"][:, 0], d["cov"][:, 0]
@@ -309,7 +310,7 @@ def part_plots(a, log):
         ax.set_title("2-sd confidence region")
         ax.legend()
         fig.tight_layout()
-        fig.savefig(os.path.join(a.out, "gaussian.png"), dpi=110)
+        fig.savefig(os.path.join(a.out, f"gaussian{a.tag}.png"), dpi=110)
     for tag, title in (("transfer", "torso size: test-range return (Fig. 8)"), ("epopt", "EPOpt, torso size (Fig. 9)")):
         p = os.path.join(a.out, f"{tag}.json")
         if not os.path.exists(p):
@@ -354,8 +355,10 @@ def main():
     ap.add_argument("--chunk", type=int, default=25, help="PPO updates per jitted chunk")
     ap.add_argument("--eval-every", dest="eval_every", type=int, default=2, help="chunks between test evaluations")
     ap.add_argument("--scale", type=float, default=1.0)
+    ap.add_argument("--alpha", type=float, default=1.0, help="ranges/gaussian: LSDR's KL(p || p_phi) weight")
     ap.add_argument("--algos", default="lsdr,fixed_dr", help="transfer/epopt: which runs (comma-separated)")
     ap.add_argument("--out", default=OUT)
+    ap.add_argument("--tag", default="", help="gaussian: suffix of the result files (gaussian<tag>.npz)")
     ap.add_argument("--out-of-bounds", dest="out_of_bounds", default="clip", choices=["clip", "terminate"],
                     help="physics outside the parameters' bounds: simulate the bound, or end the episode "
                          "at once with reward 0 (the paper's simulator: negative sizes/masses fail)")

@@ -39,15 +39,16 @@ def test_alpha_keeps_entropy_alpha_zero_collapses(dist, alpha):
             z = algo.prior_sample(k, 256)
             J = -z[:, 0]
             phi, opt = step(phi, opt, z, (J - J.mean()) / J.std())
-        return phi
+        return algo, phi
 
-    h0 = float(dists.entropy(lsdr_for(f"algo_options.dist={dist}").init_dist()))
-    wide, collapsed = run(alpha), run(0.0)
-    assert float(dists.entropy(collapsed)) < h0 - 1.5
-    assert float(dists.entropy(wide)) > h0 - 0.7
+    algo0 = lsdr_for(f"algo_options.dist={dist}")
+    h0 = float(algo0.entropy(algo0.init_dist()))
+    (a_w, wide), (a_c, collapsed) = run(alpha), run(0.0)
+    assert float(a_c.entropy(collapsed)) < h0 - 1.5
+    assert float(a_w.entropy(wide)) > h0 - 0.7
     # both move towards the better (low) end of the box
-    for phi in (wide, collapsed):
-        z = np.asarray(dists.sample(jax.random.PRNGKey(1), phi, 4000))
+    for a, phi in ((a_w, wide), (a_c, collapsed)):
+        z = np.asarray(a.sample(jax.random.PRNGKey(1), phi, 4000))
         assert np.mean(z) < 2.1 - 0.3
 
 
@@ -83,3 +84,27 @@ def test_epopt_and_fixed_dr_run(tmp_path):
             assert (m["episode_return_worst"] <= m["episode_return"] + 1e-6).all()
         else:               # fixed DR never moves the distribution
             np.testing.assert_allclose(m["dist_entropy"], np.log(1.0), atol=1e-5)
+
+
+def test_gaussian_update_does_not_depend_on_the_units():
+    """The same problem in units 10x larger (box [2, 40] instead of [0.2, 4]) gives the same
+    Gaussian, 10x larger: Adam's fixed step size acts on box-normalised coordinates, so a narrow
+    parameter (torso size) and a wide one (density) move alike."""
+    out = []
+    for scale in (1.0, 10.0):
+        algo = lsdr_for("algo_options.dist=gaussian", "algo_options.lr=0.05", f"dr.low=[{0.2 * scale}]",
+                        f"dr.high=[{4.0 * scale}]")
+        phi = algo.init_dist()
+        opt = algo.tx.init(phi)
+        step = jax.jit(algo.ascend)
+        key = jax.random.PRNGKey(0)
+        for _ in range(20):
+            key, k = jax.random.split(key)
+            z = algo.prior_sample(k, 128)
+            J = -z[:, 0] / scale
+            phi, opt = step(phi, opt, z, (J - J.mean()) / J.std())
+        d = algo.describe(phi)
+        out.append((float(d["dist_mean"][0]), float(np.sqrt(d["dist_cov"][0, 0]))))
+    (m1, s1), (m10, s10) = out
+    assert m1 < 2.1 - 0.2  # it moved towards the better (low) end
+    np.testing.assert_allclose([m10, s10], [10 * m1, 10 * s1], rtol=1e-4)

@@ -11,6 +11,12 @@ Each outer step, in one jitted function:
 
 p(z) is the uniform box ``dr.low..dr.high``; p_phi is ``binned`` (100 bins per dimension) or a
 full-covariance ``gaussian`` (mean at the box centre, variance 1/10 of the box's, as the paper).
+
+The Gaussian lives in box-normalised coordinates ``x = (z - low) / (high - low)`` (the box is
+``[0, 1]^D``): Adam's steps have the same size in every coordinate, so in raw units a torso size
+(box 0.3 wide) and a density (box 5,000 wide) would move by the same amount per step -- the
+torso mean left its box while the density mean never moved. The KL to the uniform prior is the
+same in both coordinates; reported means, covariances and entropies are in raw units.
 """
 from __future__ import annotations
 
@@ -111,11 +117,33 @@ class LSDR:
         lo, hi = self.space.low, self.space.high
         if self.cfg.dist == "binned":
             return binned.make(lo, hi, self.cfg.num_bins)
-        std = np.sqrt(self.cfg.init_var_fraction * (hi - lo) ** 2 / 12.0)
-        return gaussian.make((lo + hi) / 2, std)
+        d = len(lo)  # normalised box [0, 1]^D
+        return gaussian.make(np.full(d, 0.5), np.full(d, np.sqrt(self.cfg.init_var_fraction / 12.0)))
+
+    @property
+    def _normalised(self) -> bool:
+        return self.cfg.dist == "gaussian"
+
+    def to_z(self, x):
+        """Distribution coordinates ``[..., D]`` -> physics units (identity for ``binned``)."""
+        if not self._normalised:
+            return x
+        lo, hi = jnp.asarray(self.space.low), jnp.asarray(self.space.high)
+        return lo + x * (hi - lo)
+
+    def to_x(self, z):
+        """Physics units ``[..., D]`` -> distribution coordinates (inverse of :meth:`to_z`)."""
+        if not self._normalised:
+            return z
+        lo, hi = jnp.asarray(self.space.low), jnp.asarray(self.space.high)
+        return (z - lo) / (hi - lo)
+
+    def sample(self, key, phi, n=None):
+        """``[D]`` (or ``[n, D]``) draws of the sub-vector from p_phi, in physics units."""
+        return self.to_z(dists.sample(key, phi, n))
 
     def sampler(self, phi):
-        return lambda key: self.space.expand(dists.sample(key, phi))
+        return lambda key: self.space.expand(self.sample(key, phi))
 
     def prior_sample(self, key, n):
         return jax.random.uniform(key, (n, len(self.space)), minval=self.space.low, maxval=self.space.high)
@@ -159,7 +187,7 @@ class LSDR:
         if cfg.sample_from == "prior":
             z_sub = self.prior_sample(k_z, cfg.num_contexts)
         else:
-            z_sub = dists.sample(k_z, st.phi, cfg.num_contexts)
+            z_sub = self.sample(k_z, st.phi, cfg.num_contexts)
         zs = jax.vmap(self.space.expand)(z_sub)
         res = episodes(self.eval_env, self.ppo, st.ppo.params, st.ppo.obs_stats, zs, k_ep, 1)
         J = res["return"][:, 0]
@@ -182,10 +210,11 @@ class LSDR:
         cfg = self.cfg
         lo, hi = jnp.asarray(self.space.low), jnp.asarray(self.space.high)
         z_in = jnp.clip(z_sub, lo, hi - 1e-6 * (hi - lo))  # learned samples may leave the box
+        x_in, (x_lo, x_hi) = self.to_x(z_in), self._box()
 
         def objective(phi):
-            score = jnp.mean(Jt * dists.log_prob(phi, z_in))
-            return score - cfg.alpha * dists.kl_from_uniform(lo, hi, phi)
+            score = jnp.mean(Jt * dists.log_prob(phi, x_in))
+            return score - cfg.alpha * dists.kl_from_uniform(x_lo, x_hi, phi)
 
         def step(carry, _):
             phi, opt = carry
@@ -198,15 +227,28 @@ class LSDR:
 
         return jax.lax.scan(step, (phi, opt), None, length=cfg.grad_steps)[0]
 
+    def _box(self):
+        """The prior box in distribution coordinates: ``(low [D], high [D])``."""
+        if self._normalised:
+            return jnp.zeros(len(self.space)), jnp.ones(len(self.space))
+        return jnp.asarray(self.space.low), jnp.asarray(self.space.high)
+
+    def entropy(self, phi):
+        """Differential entropy of p_phi in physics units (nats)."""
+        h = dists.entropy(phi)
+        if self._normalised:  # z = low + x * width: + sum log width
+            h = h + jnp.sum(jnp.log(jnp.asarray(self.space.high) - jnp.asarray(self.space.low)))
+        return h
+
     def describe(self, phi) -> dict:
-        """Scalar summaries plus the distribution itself (arrays, for evolution plots)."""
-        lo, hi = jnp.asarray(self.space.low), jnp.asarray(self.space.high)
-        out = {"dist_entropy": dists.entropy(phi), "dist_kl_prior": dists.kl_from_uniform(lo, hi, phi)}
+        """Scalar summaries plus the distribution itself (arrays, for evolution plots), in physics units."""
+        out = {"dist_entropy": self.entropy(phi), "dist_kl_prior": dists.kl_from_uniform(*self._box(), phi)}
         if isinstance(phi, binned.Binned):
             out["dist_probs"] = binned.probs(phi)           # [K, bins]
         else:
-            out["dist_mean"] = phi.mean                      # [K]
-            out["dist_cov"] = gaussian.cov(phi)              # [K, K]
+            w = jnp.asarray(self.space.high) - jnp.asarray(self.space.low)
+            out["dist_mean"] = self.to_z(phi.mean)           # [K]
+            out["dist_cov"] = gaussian.cov(phi) * w[:, None] * w[None, :]  # [K, K]
         return out
 
     def policy(self, st: LSDRState):
