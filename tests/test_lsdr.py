@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from sim2real import config as config_lib
-from sim2real import dists
 from sim2real.dists import binned
 from sim2real.envs import make
 from sim2real.train import TrainConfig, build_algo, train
