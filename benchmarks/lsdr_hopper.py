@@ -46,16 +46,14 @@ BASE = [  # GPU scale: 4096 envs x 16 steps per PPO update
 ]
 
 
-OUT_OF_BOUNDS = "clip"  # --out-of-bounds: the env's rule for physics outside the parameter bounds
-
-
-def config(extra: list[str], steps: float, scale: float, seeds: int):
+def config(extra: list[str], steps: float, a):
+    """The run's ``TrainConfig``: ``BASE`` + ``extra`` with ``--scale``, ``--seeds`` and ``--out-of-bounds`` of ``a``."""
     from sim2real import config as config_lib
     from sim2real.train import TrainConfig
 
-    args = BASE + [f"env_options.out_of_bounds={OUT_OF_BOUNDS}", f"total_steps={int(steps * scale)}",
-                   f"num_seeds={seeds}"] + extra
-    if scale < 1:  # CPU check of the script
+    args = BASE + [f"env_options.out_of_bounds={a.out_of_bounds}", f"total_steps={int(steps * a.scale)}",
+                   f"num_seeds={a.seeds}"] + extra
+    if a.scale < 1:  # CPU check of the script
         args += ["ppo.num_envs=64", "ppo.num_steps=16", "algo_options.num_contexts=8", "algo_options.eval_horizon=50"]
     return config_lib.load(TrainConfig, args)
 
@@ -192,14 +190,14 @@ def part_ranges(a, log):
                       f"algo_options.num_contexts={a.contexts}", f"algo_options.dist_every={a.dist_every}",
                       f"algo_options.dist_start={a.dist_start}", f"updates_per_chunk={a.chunk}",
                       f"algo_options.alpha={a.alpha}"],
-                     a.steps, a.scale, a.seeds)
+                     a.steps, a)
         _, rows, probs, _, _, _ = run(cfg, log=log)
         edges = np.linspace(prior[0], prior[1], probs.shape[-1] + 1)
         centers = (edges[1:] + edges[:-1]) / 2
         fits = [uniform_fit(centers, probs[-1, s, 0]) for s in range(probs.shape[1])]
         summary[name] = {"prior": prior, "paper_converged": conv, "learned_per_seed": fits,
                          "learned_mean": np.mean(fits, 0).tolist(), "learned_std": np.std(fits, 0).tolist(),
-                         "out_of_bounds": OUT_OF_BOUNDS,
+                         "out_of_bounds": a.out_of_bounds,
                          "final_train_return": rows[-1]["train_return"], "env_steps": rows[-1]["env_steps"],
                          "wall_seconds": rows[-1]["wall_seconds"]}
         np.savez(os.path.join(a.out, f"ranges_{name}.npz"), probs=probs, edges=edges,
@@ -221,7 +219,7 @@ def part_gaussian(a, log):
     cfg = config(["name=lsdr_gauss", "algo=lsdr", f"dr.params=[{','.join(names)}]", f"dr.low={lo}", f"dr.high={hi}",
                   "algo_options.dist=gaussian", f"algo_options.num_contexts={a.contexts}", f"algo_options.alpha={a.alpha}",
                   f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
-                  f"updates_per_chunk={a.chunk}"], a.steps, a.scale, a.seeds)
+                  f"updates_per_chunk={a.chunk}"], a.steps, a)
     _, rows, _, dists, _, _ = run(cfg, log=log)
     np.savez(os.path.join(a.out, f"gaussian{a.tag}.npz"), names=np.array(names), low=np.array(lo), high=np.array(hi),
              mean=np.stack([d[0] for d in dists]), cov=np.stack([d[1] for d in dists]),
@@ -245,13 +243,13 @@ def part_transfer(a, log, optimizer="ppo"):
         cfg = config([f"name={tag}_{algo}", f"algo={algo}", "dr.params=[torso_size]", f"dr.low=[{prior[0]}]",
                       f"dr.high=[{prior[1]}]", "algo_options.dist=binned", f"algo_options.num_contexts={a.contexts}",
                       f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
-                      f"updates_per_chunk={a.chunk}"] + extra_opt, a.steps, a.scale, a.seeds)
+                      f"updates_per_chunk={a.chunk}"] + extra_opt, a.steps, a)
         st, rows, probs, _, _, _ = run(cfg, a.eval_every, evaluate, log=log)
         result[algo] = {"train": rows}
         if optimizer == "ppo":
             log(f"  fine-tuning {algo} on the test range (fixed uniform DR over it)")
             ft = config([f"name={tag}_{algo}_ft", "algo=fixed_dr", "dr.params=[torso_size]", f"dr.low=[{prior[0]}]",
-                         f"dr.high=[{prior[1]}]", f"updates_per_chunk={a.chunk}"], a.ft_steps, a.scale, a.seeds)
+                         f"dr.high=[{prior[1]}]", f"updates_per_chunk={a.chunk}"], a.ft_steps, a)
             _, ft_rows, _, _, _, _ = run(ft, a.eval_every, evaluate, state=st, log=log)
             result[algo]["finetune"] = ft_rows
         if probs is not None:
@@ -363,8 +361,6 @@ def main():
                     help="physics outside the parameters' bounds: simulate the bound, or end the episode "
                          "at once with reward 0 (the paper's simulator: negative sizes/masses fail)")
     a = ap.parse_args()
-    global OUT_OF_BOUNDS
-    OUT_OF_BOUNDS = a.out_of_bounds
     os.makedirs(a.out, exist_ok=True)
     import jax
 

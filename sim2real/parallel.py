@@ -91,16 +91,14 @@ def batch_map(fn: Callable, batch: int) -> Callable:
       outputs stay split, so feeding them back costs no copy. Falls back to
       plain ``jax.jit(fn)`` when only one device divides ``B``.
     """
-    devs = batch_devices(batch)
-    if len(devs) == 1:
+    sharding = batch_sharding(batch)
+    if sharding.mesh.size == 1:
         return jax.jit(fn)
-    spec = PartitionSpec("batch")
-    mesh = Mesh(devs, ("batch",))
     # check_vma=False: MJX's solver runs lax.cond inside scans whose branches return values that
     # are not marked per-device, which the varying-axes check rejects; each slice's loop is
     # independent here by construction (fn treats envs independently).
-    mapped = jax.jit(jax.shard_map(fn, mesh=mesh, in_specs=spec, out_specs=spec, check_vma=False))
-    sharding = NamedSharding(mesh, spec)
+    mapped = jax.jit(jax.shard_map(fn, mesh=sharding.mesh, in_specs=sharding.spec, out_specs=sharding.spec,
+                                   check_vma=False))
 
     def run(*args):
         # a no-op for arguments already split this way (a previous call's outputs)

@@ -105,6 +105,9 @@ class LSDR:
             raise ValueError(f"lsdr policy_optimizer '{cfg.policy_optimizer}' unknown: ppo, epopt")
         self.env, self.cfg, self.learn_dist = env, cfg, learn_dist
         self.space = DRSpace(env, dr)
+        # the prior box: p_phi's coordinates are scaled by it (Gaussian) and samples clipped to it
+        self._low, self._high = np.asarray(self.space.low), np.asarray(self.space.high)
+        self._width = self._high - self._low
         ctx = Context.make(env, self.space.names, self.space.low, self.space.high)
         self.ppo = PPO(env, ppo_cfg, num_updates, ctx)
         self.tx = optax.adam(cfg.lr)
@@ -126,17 +129,11 @@ class LSDR:
 
     def to_z(self, x):
         """Distribution coordinates ``[..., D]`` -> physics units (identity for ``binned``)."""
-        if not self._normalised:
-            return x
-        lo, hi = jnp.asarray(self.space.low), jnp.asarray(self.space.high)
-        return lo + x * (hi - lo)
+        return self._low + x * self._width if self._normalised else x
 
     def to_x(self, z):
         """Physics units ``[..., D]`` -> distribution coordinates (inverse of :meth:`to_z`)."""
-        if not self._normalised:
-            return z
-        lo, hi = jnp.asarray(self.space.low), jnp.asarray(self.space.high)
-        return (z - lo) / (hi - lo)
+        return (z - self._low) / self._width if self._normalised else z
 
     def sample(self, key, phi, n=None):
         """``[D]`` (or ``[n, D]``) draws of the sub-vector from p_phi, in physics units."""
@@ -208,8 +205,8 @@ class LSDR:
           z_sub: ``[K, D]`` evaluated contexts; Jt: ``[K]`` their standardised returns.
         """
         cfg = self.cfg
-        lo, hi = jnp.asarray(self.space.low), jnp.asarray(self.space.high)
-        z_in = jnp.clip(z_sub, lo, hi - 1e-6 * (hi - lo))  # learned samples may leave the box
+        # learned samples may leave the box
+        z_in = jnp.clip(z_sub, self._low, self._high - 1e-6 * self._width)
         x_in, (x_lo, x_hi) = self.to_x(z_in), self._box()
 
         def objective(phi):
@@ -231,13 +228,13 @@ class LSDR:
         """The prior box in distribution coordinates: ``(low [D], high [D])``."""
         if self._normalised:
             return jnp.zeros(len(self.space)), jnp.ones(len(self.space))
-        return jnp.asarray(self.space.low), jnp.asarray(self.space.high)
+        return jnp.asarray(self._low), jnp.asarray(self._high)
 
     def entropy(self, phi):
         """Differential entropy of p_phi in physics units (nats)."""
         h = dists.entropy(phi)
         if self._normalised:  # z = low + x * width: + sum log width
-            h = h + jnp.sum(jnp.log(jnp.asarray(self.space.high) - jnp.asarray(self.space.low)))
+            h = h + jnp.sum(jnp.log(self._width))
         return h
 
     def describe(self, phi) -> dict:
@@ -246,9 +243,8 @@ class LSDR:
         if isinstance(phi, binned.Binned):
             out["dist_probs"] = binned.probs(phi)           # [K, bins]
         else:
-            w = jnp.asarray(self.space.high) - jnp.asarray(self.space.low)
             out["dist_mean"] = self.to_z(phi.mean)           # [K]
-            out["dist_cov"] = gaussian.cov(phi) * w[:, None] * w[None, :]  # [K, K]
+            out["dist_cov"] = gaussian.cov(phi) * jnp.outer(self._width, self._width)  # [K, K]
         return out
 
     def policy(self, st: LSDRState):

@@ -29,7 +29,7 @@ from mujoco import mjx
 from sim2real.physics import catalog, stepper
 from sim2real.physics.effects import Effects, EffectsConfig, EffectState
 from sim2real.physics.model_apply import PhysicsModel
-from sim2real.physics.params import Param, ParamSpec, clip
+from sim2real.physics.params import Param, ParamSpec, clip, in_bounds
 
 ASSETS = os.path.join(os.path.dirname(__file__), "assets")
 # A state entry beyond this counts as diverged (NaN/inf fail the comparison too): far past any
@@ -217,7 +217,7 @@ class Env:
         """``[]`` bool: False only when ``out_of_bounds='terminate'`` and ``z`` leaves the bounds."""
         if self.config.out_of_bounds == "clip":
             return jnp.ones((), bool)
-        return jnp.all((z >= self.spec.low) & (z <= self.spec.high))
+        return in_bounds(self.spec, z)
 
     def _observe(self, z, data, goal, key):
         k1, k2 = jax.random.split(key)

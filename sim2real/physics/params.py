@@ -154,6 +154,11 @@ def clip(spec: ParamSpec, z: jnp.ndarray) -> jnp.ndarray:
     return jnp.clip(z, spec.low, spec.high)
 
 
+def in_bounds(spec: ParamSpec, z: jnp.ndarray) -> jnp.ndarray:
+    """``[...]`` bool: every entry of ``z [..., P]`` inside its physical bounds (jittable)."""
+    return jnp.all((z >= spec.low) & (z <= spec.high), axis=-1)
+
+
 @dataclasses.dataclass(frozen=True)
 class Subspace:
     """A subset of named parameters, e.g. the ones a DR distribution randomises.
