@@ -211,20 +211,51 @@ def part_ranges(a, log):
         json.dump(old, f, indent=2)
 
 
+GRID_PAIR = ("torso_size", "friction")  # the 2-D test grid of the Gaussian part (Fig. 1b-d)
+
+
 def part_gaussian(a, log):
+    """4-D full-covariance Gaussian LSDR (Fig. 1c-d) and uniform DR over the same box (Fig. 1b).
+
+    Both final policies are evaluated on a 10 x 10 grid over the prior box of ``GRID_PAIR`` (the
+    other two parameters at the hopper's defaults). The paper samples the Gaussian's score term
+    from p_phi ("for the experiments with multivariate Gaussian distributions changing the
+    sampling distribution was not required"): ``--sample-from learned`` is this part's default.
+    """
     names = list(TABLE_I)
     lo = [TABLE_I[n][0][0] for n in names]
     hi = [TABLE_I[n][0][1] for n in names]
-    log("LSDR full-covariance Gaussian over the 4-D Table I box")
-    cfg = config(["name=lsdr_gauss", "algo=lsdr", f"dr.params=[{','.join(names)}]", f"dr.low={lo}", f"dr.high={hi}",
-                  "algo_options.dist=gaussian", f"algo_options.num_contexts={a.contexts}", f"algo_options.alpha={a.alpha}",
-                  f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
-                  f"updates_per_chunk={a.chunk}"], a.steps, a)
-    _, rows, _, dists, _, _ = run(cfg, log=log)
-    np.savez(os.path.join(a.out, f"gaussian{a.tag}.npz"), names=np.array(names), low=np.array(lo), high=np.array(hi),
-             mean=np.stack([d[0] for d in dists]), cov=np.stack([d[1] for d in dists]),
-             env_steps=np.array([r["env_steps"] for r in rows]))
-    write_csv(os.path.join(a.out, f"gaussian{a.tag}.csv"), rows)
+    axes = [np.linspace(TABLE_I[n][0][0], TABLE_I[n][0][1], 10) for n in GRID_PAIR]
+    grid = [[u, v] for u in axes[0] for v in axes[1]]
+    evaluate = test_evaluator(list(GRID_PAIR), grid)
+    path = os.path.join(a.out, f"gaussian{a.tag}_grid.json")
+    result = json.load(open(path)) if os.path.exists(path) else {}
+    for algo in a.algos.split(","):
+        # fixed DR is the uniform prior itself (Fig. 1b): a binned distribution starts uniform
+        dist = "gaussian" if algo == "lsdr" else "binned"
+        log(f"{algo}: {dist} over the 4-D Table I box, score samples from {a.sample_from}")
+        cfg = config([f"name=gauss_{algo}", f"algo={algo}", f"dr.params=[{','.join(names)}]", f"dr.low={lo}",
+                      f"dr.high={hi}", f"algo_options.dist={dist}", f"algo_options.num_contexts={a.contexts}",
+                      f"algo_options.alpha={a.alpha}", f"algo_options.sample_from={a.sample_from}",
+                      f"algo_options.center={a.center}", f"algo_options.lr={a.dist_lr}",
+                      f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
+                      f"updates_per_chunk={a.chunk}"], a.steps, a)
+        _, rows, _, dists, _, _ = run(cfg, cfg.num_chunks, evaluate, log=log)
+        final = rows[-1]
+        log(f"  grid return {final['test_return']:.0f} (mean over {len(grid)} contexts and {a.seeds} seeds)")
+        result[algo] = {"test_grid": final["test_grid"], "test_return": final["test_return"],
+                        "train_return": final["train_return"]}
+        if algo == "lsdr":
+            np.savez(os.path.join(a.out, f"gaussian{a.tag}.npz"), names=np.array(names), low=np.array(lo),
+                     high=np.array(hi), mean=np.stack([d[0] for d in dists]), cov=np.stack([d[1] for d in dists]),
+                     env_steps=np.array([r["env_steps"] for r in rows if "wall_seconds" in r]))
+            write_csv(os.path.join(a.out, f"gaussian{a.tag}.csv"), rows)
+        result["grid"] = {"names": list(GRID_PAIR), "axes": [x.tolist() for x in axes]}
+        result.setdefault("settings", {})[algo] = {"steps": a.steps, "seeds": a.seeds, "alpha": a.alpha,
+                                                   "sample_from": a.sample_from, "dist": dist,
+                                                   "center": a.center, "dist_lr": a.dist_lr}
+        with open(path, "w") as f:
+            json.dump(result, f)
 
 
 def part_transfer(a, log, optimizer="ppo"):
@@ -259,6 +290,41 @@ def part_transfer(a, log, optimizer="ppo"):
                                                    "epopt_contexts": a.epopt_contexts if optimizer == "epopt" else None}
         with open(path, "w") as f:
             json.dump(result, f)
+
+
+def plot_gaussian_grid(res, gauss, path):
+    """Heat maps of the final policies' return over ``GRID_PAIR`` (mean over seeds), uniform DR and
+    LSDR, with the learned Gaussian's 68/95/99% confidence regions of that pair (seed 0)."""
+    import matplotlib.pyplot as plt
+
+    names, (u, v) = res["grid"]["names"], res["grid"]["axes"]
+    algos = [k for k in ("fixed_dr", "lsdr") if k in res]
+    fig, axes = plt.subplots(1, len(algos), figsize=(5.2 * len(algos), 4.2), squeeze=False)
+    vmax = max(np.max(np.mean(res[k]["test_grid"], 0)) for k in algos)
+    for ax, k in zip(axes[0], algos):
+        g = np.mean(res[k]["test_grid"], 0).reshape(len(u), len(v))  # [torso, friction]
+        du, dv = (u[1] - u[0]) / 2, (v[1] - v[0]) / 2
+        im = ax.imshow(g.T, origin="lower", aspect="auto", cmap="viridis", vmin=0, vmax=vmax,
+                       extent=[u[0] - du, u[-1] + du, v[0] - dv, v[-1] + dv])
+        fig.colorbar(im, ax=ax, label="return")
+        label = {"fixed_dr": "uniform DR", "lsdr": "learned Gaussian DR"}[k]
+        ax.set_title(f"{label}: mean {np.mean(res[k]['test_grid']):.0f}")
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(names[1])
+        if k == "lsdr" and gauss is not None:
+            order = list(gauss["names"])
+            i, j = order.index(names[0]), order.index(names[1])
+            m, c = gauss["mean"][-1, 0][[i, j]], gauss["cov"][-1, 0][np.ix_([i, j], [i, j])]
+            w, vec = np.linalg.eigh(c)
+            th = np.linspace(0, 2 * np.pi, 100)
+            for conf, chi2 in ((68, 2.279), (95, 5.991), (99, 9.210)):  # chi-square(2) quantiles
+                e = vec @ (np.sqrt(chi2 * np.maximum(w, 0))[:, None] * np.stack([np.cos(th), np.sin(th)]))
+                ax.plot(m[0] + e[0], m[1] + e[1], "w", lw=1)
+                ax.annotate(f"{conf}%", (m[0] + e[0, 25], m[1] + e[1, 25]), color="w", fontsize=7)
+            ax.set_xlim(u[0] - du, u[-1] + du)
+            ax.set_ylim(v[0] - dv, v[-1] + dv)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
 
 
 def part_plots(a, log):
@@ -309,6 +375,10 @@ def part_plots(a, log):
         ax.legend()
         fig.tight_layout()
         fig.savefig(os.path.join(a.out, f"gaussian{a.tag}.png"), dpi=110)
+    gg = os.path.join(a.out, f"gaussian{a.tag}_grid.json")
+    if os.path.exists(gg):  # Fig. 1b-d: grid returns of uniform vs learned DR, learned confidence regions
+        plot_gaussian_grid(json.load(open(gg)), np.load(gp) if os.path.exists(gp) else None,
+                           os.path.join(a.out, f"gaussian{a.tag}_grid.png"))
     for tag, title in (("transfer", "torso size: test-range return (Fig. 8)"), ("epopt", "EPOpt, torso size (Fig. 9)")):
         p = os.path.join(a.out, f"{tag}.json")
         if not os.path.exists(p):
@@ -354,7 +424,12 @@ def main():
     ap.add_argument("--eval-every", dest="eval_every", type=int, default=2, help="chunks between test evaluations")
     ap.add_argument("--scale", type=float, default=1.0)
     ap.add_argument("--alpha", type=float, default=1.0, help="ranges/gaussian: LSDR's KL(p || p_phi) weight")
-    ap.add_argument("--algos", default="lsdr,fixed_dr", help="transfer/epopt: which runs (comma-separated)")
+    ap.add_argument("--algos", default="lsdr,fixed_dr", help="gaussian/transfer/epopt: which runs (comma-separated)")
+    ap.add_argument("--sample-from", dest="sample_from", default="learned", choices=["learned", "prior"],
+                    help="gaussian: where the score term's contexts come from (the paper: p_phi)")
+    ap.add_argument("--center", default="ema", choices=["ema", "batch"],
+                    help="gaussian: centre the returns by their running mean (paper) or the batch mean")
+    ap.add_argument("--dist-lr", dest="dist_lr", type=float, default=0.05, help="gaussian: Adam step on phi")
     ap.add_argument("--out", default=OUT)
     ap.add_argument("--tag", default="", help="gaussian: suffix of the result files (gaussian<tag>.npz)")
     ap.add_argument("--out-of-bounds", dest="out_of_bounds", default="clip", choices=["clip", "terminate"],

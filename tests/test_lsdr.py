@@ -107,3 +107,30 @@ def test_gaussian_update_does_not_depend_on_the_units():
     (m1, s1), (m10, s10) = out
     assert m1 < 2.1 - 0.2  # it moved towards the better (low) end
     np.testing.assert_allclose([m10, s10], [10 * m1, 10 * s1], rtol=1e-4)
+
+
+@pytest.mark.parametrize("center", ["ema", "batch"])
+def test_failed_batch_moves_a_learned_gaussian_only_without_batch_centering(center):
+    """All K episodes fail (J = 0) after a good running mean: centred by the running mean, every
+    Jt is the same negative number, and M steps on samples from p_phi push their likelihood down
+    -- the Gaussian runs away from its own samples (mean out, variance to nothing) with no
+    information in the returns; centred by the batch, Jt = 0 and it stays put."""
+    from sim2real.dists import gaussian
+
+    algo = lsdr_for("algo_options.dist=gaussian", "algo_options.alpha=0", f"algo_options.center={center}",
+                    "algo_options.sample_from=learned")
+    phi0 = phi = algo.init_dist()
+    opt = algo.tx.init(phi)
+    Jt, _, _ = algo.standardise(jax.numpy.zeros(64), jax.numpy.asarray(500.0), jax.numpy.asarray(1e4),
+                                jax.numpy.asarray(True))
+    step = jax.jit(algo.ascend)
+    key = jax.random.PRNGKey(0)
+    for _ in range(5):
+        key, k = jax.random.split(key)
+        phi, opt = step(phi, opt, algo.sample(k, phi, 64), Jt)
+    if center == "batch":
+        np.testing.assert_array_equal(np.asarray(Jt), 0.0)
+        assert float(gaussian.kl(phi0, phi)) < 1e-6
+    else:
+        assert float(Jt[0]) < -1
+        assert float(gaussian.kl(phi0, phi)) > 5.0

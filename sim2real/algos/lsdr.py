@@ -57,6 +57,12 @@ class LSDRConfig:
       dist_start: PPO updates before the first distribution update (let the policy learn first:
         the returns of an untrained policy say little about which physics is solvable).
       ema: decay of the exponential return statistics used to standardise J.
+      center: what J is centred by before scaling: ``ema`` (the paper: the exponentially averaged
+        mean) or ``batch`` (the K returns' own mean, a REINFORCE baseline). With ``ema`` the
+        batch's offset from the running mean, c, adds ``c * mean(log p_phi(z_i))`` to the
+        objective: for samples from p_phi, M steps on the same samples then shrink p_phi onto
+        them (c > 0) or blow it up (c < 0, e.g. once all K episodes fail); for samples from p(z)
+        it adds ``-c * KL(p || p_phi)``, a random change of alpha that can turn it negative.
       eval_horizon: steps of each evaluation episode (0: the env's episode length).
       policy_optimizer: ``ppo`` | ``epopt``.
       epopt: EPOpt settings when ``policy_optimizer == 'epopt'``.
@@ -73,6 +79,7 @@ class LSDRConfig:
     dist_every: int = 1
     dist_start: int = 0
     ema: float = 0.9
+    center: str = "ema"
     eval_horizon: int = 0
     policy_optimizer: str = "ppo"
     epopt: epopt.EPOptConfig = epopt.EPOptConfig()
@@ -101,6 +108,8 @@ class LSDR:
             raise ValueError(f"lsdr dist '{cfg.dist}' unknown: binned, gaussian")
         if cfg.sample_from not in ("prior", "learned"):
             raise ValueError(f"lsdr sample_from '{cfg.sample_from}' unknown: prior, learned")
+        if cfg.center not in ("ema", "batch"):
+            raise ValueError(f"lsdr center '{cfg.center}' unknown: ema, batch")
         if cfg.policy_optimizer not in ("ppo", "epopt"):
             raise ValueError(f"lsdr policy_optimizer '{cfg.policy_optimizer}' unknown: ppo, epopt")
         self.env, self.cfg, self.learn_dist = env, cfg, learn_dist
@@ -188,14 +197,23 @@ class LSDR:
         zs = jax.vmap(self.space.expand)(z_sub)
         res = episodes(self.eval_env, self.ppo, st.ppo.params, st.ppo.obs_stats, zs, k_ep, 1)
         J = res["return"][:, 0]
-        # exponentially averaged batch statistics standardise J so both terms of Eq. 1 have similar scale
-        b_mean, b_var = J.mean(), J.var()
-        mean = jnp.where(st.stats_init, cfg.ema * st.ret_mean + (1 - cfg.ema) * b_mean, b_mean)
-        var = jnp.where(st.stats_init, cfg.ema * st.ret_var + (1 - cfg.ema) * b_var, b_var)
-        Jt = (J - mean) / jnp.sqrt(var + 1e-8)
+        Jt, mean, var = self.standardise(J, st.ret_mean, st.ret_var, st.stats_init)
         phi, opt = self.ascend(st.phi, st.phi_opt, z_sub, Jt)
         st = st.replace(phi=phi, phi_opt=opt, ret_mean=mean, ret_var=var, stats_init=jnp.ones((), bool), key=key)
         return st, {"dist_eval_return": J.mean()}
+
+    def standardise(self, J, ret_mean, ret_var, stats_init):
+        """``J [K]`` -> ``(Jt [K], new running mean, new running variance)``.
+
+        Exponentially averaged batch statistics scale J so both terms of Eq. 1 have similar
+        size; J is centred by the running mean or by its own mean (``center``).
+        """
+        cfg = self.cfg
+        b_mean, b_var = J.mean(), J.var()
+        mean = jnp.where(stats_init, cfg.ema * ret_mean + (1 - cfg.ema) * b_mean, b_mean)
+        var = jnp.where(stats_init, cfg.ema * ret_var + (1 - cfg.ema) * b_var, b_var)
+        Jt = (J - (mean if cfg.center == "ema" else b_mean)) / jnp.sqrt(var + 1e-8)
+        return Jt, mean, var
 
     def ascend(self, phi, opt, z_sub, Jt):
         """M Adam steps on ``mean(Jt * log p_phi(z)) - alpha * KL(p || p_phi)`` (Eq. 2).
