@@ -12,13 +12,14 @@ import json
 import os
 import shutil
 import time
+import warnings
 from typing import Any
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real import checkpoint
+from sim2real import checkpoint, parallel
 from sim2real import config as config_lib
 from sim2real.algos.base import DRConfig
 from sim2real.envs import make
@@ -130,8 +131,19 @@ class Run:
         config_lib.save(cfg, os.path.join(self.dir, "config.yaml"))
 
 
+def _use_cpu_cores():
+    """One CPU device per core for ``ppo.split_envs``; only possible before JAX has started."""
+    try:
+        parallel.use_cpu_cores()
+    except RuntimeError:
+        warnings.warn(f"ppo.split_envs: JAX already runs with {len(jax.devices('cpu'))} CPU device(s) "
+                      f"(the count is fixed when JAX starts); rollouts are split over those", stacklevel=3)
+
+
 def train(cfg: TrainConfig) -> dict:
     """Run (or resume) training; returns ``{'state', 'metrics', 'run_dir', 'algo'}``."""
+    if cfg.ppo.split_envs:  # (on a GPU host the CPU device count changes nothing)
+        _use_cpu_cores()
     env = make(cfg.env, **cfg.env_options)
     algo = build_algo(cfg, env)
     run = Run(cfg)

@@ -50,6 +50,30 @@ SCRIPT = textwrap.dedent("""
     np.testing.assert_allclose(np.asarray(again[0].obs), np.asarray(jax.jit(roll_keys)(*one_k)[0].obs),
                                rtol=1e-5, atol=1e-6)
     assert len(parallel.batch_devices(3)) == 1      # an odd batch stays on one device
+
+    # PPO's rollout with ppo.split_envs: each device steps its envs (with resets that draw new
+    # physics from per-env keys), the same batch comes out
+    env = make("pendulum", episode_length=15)
+    from sim2real.rl import networks
+    from sim2real.rl.ppo import PPOConfig
+    from sim2real.rl.rollout import Context, collect, init_runner
+    net_cfg = PPOConfig(net=networks.NetConfig(hidden=(8,))).net
+    net, params = networks.init_params(jax.random.PRNGKey(2), net_cfg, env.obs_size, 0, env.action_size)
+    from sim2real.rl import normalize
+    stats = normalize.init(env.obs_size)
+    i_mass = int(env.spec.indices(["mass:pole"])[0])
+    sample = lambda k: jnp.asarray(env.default_z()).at[i_mass].set(jax.random.uniform(k, (), minval=0.8, maxval=1.4))
+    # built under jit like the driver's state (eager arrays are committed to device 0)
+    runner = jax.jit(lambda k: init_runner(env, k, B, sample, 0))(jax.random.PRNGKey(3))
+    col = lambda split: jax.jit(lambda r, k: collect(env, net, params, stats, Context.empty(), r, k, sample, 40,
+                                                     split=split))
+    r1, b1, s1 = col(False)(runner, jax.random.PRNGKey(4))
+    r2, b2, s2 = col(True)(runner, jax.random.PRNGKey(4))
+    assert len(r2.z.sharding.device_set) == 2, r2.z.sharding   # the runner stays split
+    assert int(s1["episodes"]) == int(s2["episodes"]) == 2 * B  # two resets per env in 40 steps
+    for a, b in ((b1.obs, b2.obs), (b1.action, b2.action), (b1.reward, b2.reward), (b1.z, b2.z)):
+        np.testing.assert_allclose(np.asarray(b), np.asarray(a), rtol=1e-5, atol=1e-5)
+    assert len(np.unique(np.asarray(b1.z)[:, :, i_mass])) > B  # resets drew new masses
     try:
         parallel.shard_batch({"a": jnp.zeros(4), "b": jnp.zeros(3)})
     except ValueError as e:

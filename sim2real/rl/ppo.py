@@ -43,6 +43,8 @@ class PPOConfig:
       normalize_adv: standardise advantages per minibatch.
       reward_scale: multiply rewards before GAE.
       net: network shape.
+      split_envs: step each rollout's envs on all the host's devices that divide ``num_envs`` (the
+        CPU cores: the training driver calls ``parallel.use_cpu_cores()``); learning stays whole.
     """
 
     num_envs: int = 64
@@ -62,6 +64,7 @@ class PPOConfig:
     normalize_adv: bool = True
     reward_scale: float = 1.0
     net: NetConfig = NetConfig()
+    split_envs: bool = False
 
     @property
     def batch_size(self) -> int:
@@ -111,7 +114,7 @@ class PPO:
         """One PPO iteration: collect with ``sample`` for resets, then learn. Returns ``(state, metrics)``."""
         key, k_col, k_learn = jax.random.split(st.key, 3)
         runner, batch, ep = collect(self.env, self.net, st.params, st.obs_stats, self.ctx, st.runner, k_col,
-                                    sample, self.cfg.num_steps)
+                                    sample, self.cfg.num_steps, split=self.cfg.split_envs)
         st = st.replace(runner=runner, key=key)
         st, metrics = self.learn(st, batch, k_learn)
         metrics.update(

@@ -9,6 +9,9 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
+from jax.sharding import NamedSharding, PartitionSpec
+
+from sim2real import parallel
 from sim2real.envs.autoreset import step_autoreset
 from sim2real.envs.base import Env, State
 from sim2real.rl import networks, normalize
@@ -104,41 +107,63 @@ def init_runner(env: Env, key, num_envs: int, sample: Callable, carry_size: int)
 
 
 def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, key, sample: Callable,
-            num_steps: int, deterministic: bool = False):
+            num_steps: int, deterministic: bool = False, split: bool = False):
     """Run ``num_steps`` steps of all envs.
+
+    Every env draws from its own key (``[T, B]`` keys from ``key``), so the draws do not depend on
+    how the batch is split. With ``split``, each of the host's devices that divide ``B`` (the CPU
+    cores after ``parallel.use_cpu_cores()``) steps its own slice of the envs
+    (``parallel.batch_map``'s ``shard_map``); the returned batch is gathered whole for learning
+    and the runner stays split for the next call.
 
     Returns ``(runner, batch [T, B], stats)`` with ``stats`` holding the sums over episodes that
     ended in this batch (``return_sum``, ``length_sum``, ``episodes``) and ``diverged`` steps.
     """
     num_envs = runner.z.shape[0]
     policy = jax.vmap(net.apply, in_axes=(None, 0, 0, 0, 0))
+    per_env = jax.vmap(lambda k: jax.random.split(k), out_axes=1)  # [B] keys -> 2 x [B] keys
 
     def step(r: Runner, k):
-        k_act, k_env = jax.random.split(k)
+        n = r.z.shape[0]  # this device's slice of the envs
+        k_act, k_env = per_env(k)
         obs = normalize.apply(obs_stats, r.env_state.obs)
         ctx = ctx_fn(r.z)
         (mean, log_std, value), carry = policy(params, obs, ctx, r.carry, r.first)
-        action = mean if deterministic else networks.sample_action(k_act, mean, log_std)
+        action = mean if deterministic else jax.vmap(networks.sample_action)(k_act, mean, log_std)
         log_prob = networks.gaussian_log_prob(mean, log_std, action)
         env_step = lambda s, z, a, kk: step_autoreset(env, s, z, to_ctrl(env, a), kk, sample)
-        state, z, tr, done = jax.vmap(env_step)(r.env_state, r.z, action, jax.random.split(k_env, num_envs))
+        state, z, tr, done = jax.vmap(env_step)(r.env_state, r.z, action, k_env)
         # value of the pre-reset next observation, with the pre-reset recurrent state
         nobs = normalize.apply(obs_stats, tr.next_obs)
-        (_, _, next_value), _ = policy(params, nobs, ctx, carry, jnp.zeros(num_envs, bool))
+        (_, _, next_value), _ = policy(params, nobs, ctx, carry, jnp.zeros(n, bool))
         ep_return = r.ep_return + tr.reward
         ep_length = r.ep_length + 1
         out = Batch(obs=obs, ctx=ctx, first=r.first, action=action, log_prob=log_prob, value=value,
                     next_value=next_value, reward=tr.reward, terminated=tr.terminated,
-                    truncated=tr.truncated, z=r.z, raw_obs=r.env_state.obs, carry0=jnp.zeros(0),
-                    valid=jnp.ones(num_envs))
-        ended = dict(return_sum=jnp.sum(jnp.where(done, ep_return, 0.0)),
-                     length_sum=jnp.sum(jnp.where(done, ep_length, 0)),
-                     episodes=jnp.sum(done), diverged=jnp.sum(tr.diverged))
+                    truncated=tr.truncated, z=r.z, raw_obs=r.env_state.obs, carry0=jnp.zeros((n, 0)),
+                    valid=jnp.ones(n))
+        # per env ([B]); summed over the batch outside, where the whole batch is
+        ended = dict(return_sum=jnp.where(done, ep_return, 0.0), length_sum=jnp.where(done, ep_length, 0),
+                     episodes=done.astype(jnp.int32), diverged=tr.diverged.astype(jnp.int32))
         r = Runner(state, z, carry, done, jnp.where(done, 0.0, ep_return), jnp.where(done, 0, ep_length))
         return r, (out, ended)
 
+    def roll(runner, keys):
+        return jax.lax.scan(step, runner, keys)
+
+    keys = jax.random.split(key, (num_steps, num_envs))
+    sharding = parallel.batch_sharding(num_envs) if split else None
+    if sharding is not None and sharding.mesh.size > 1:
+        over_envs = PartitionSpec(None, "batch")  # [T, B, ...]
+        # check_vma=False: see parallel.batch_map (MJX's solver conds); envs are independent here
+        roll = jax.shard_map(roll, mesh=sharding.mesh, in_specs=(sharding.spec, over_envs),
+                             out_specs=(sharding.spec, over_envs), check_vma=False)
     carry0 = runner.carry
-    runner, (batch, ended) = jax.lax.scan(step, runner, jax.random.split(key, num_steps))
+    runner, (batch, ended) = roll(runner, keys)
+    if sharding is not None and sharding.mesh.size > 1:
+        # learning runs on the whole batch on every device (no cross-device reductions in the
+        # loss, so the update is the one-device update)
+        whole = NamedSharding(sharding.mesh, PartitionSpec())
+        batch, ended = jax.lax.with_sharding_constraint((batch, ended), whole)
     stats = jax.tree_util.tree_map(jnp.sum, ended)
     return runner, batch.replace(carry0=carry0), stats
-
