@@ -56,9 +56,13 @@ def test_recurrent_and_context_policies_train_over_seeds(tmp_path, extra):
 
 
 def test_ppo_learns_pendulum_swing_up(tmp_path):
-    """From about -1200 (random) to a swing-up-and-hold policy within ~1.2M steps on CPU."""
+    """From about -1200 (random) to a swing-up-and-hold policy with the config's 1.5M steps on CPU.
+
+    (1.2M steps were enough before rollouts drew from per-env keys; with the new draws 25 of 32
+    episodes ended upright at 1.2M, all 32 at 1.5M with mean return -136.)
+    """
     cfg = config_lib.load(TrainConfig, [f"config={ROOT}/configs/pendulum.yaml", f"out_dir={tmp_path}",
-                                        "total_steps=1_200_000", "progress=false", "tensorboard=false",
+                                        "progress=false", "tensorboard=false",
                                         "checkpoint_every=100"])
     out = train(cfg)
     env, ppo = out["env"], out["algo"].ppo
