@@ -292,6 +292,13 @@ def part_transfer(a, log, optimizer="ppo"):
             json.dump(result, f)
 
 
+def ellipse(cov2, radius: float, n: int = 100):
+    """``[2, n]`` offsets from the mean of the ``radius``-Mahalanobis contour of a 2-D covariance."""
+    w, v = np.linalg.eigh(cov2)
+    th = np.linspace(0, 2 * np.pi, n)
+    return v @ (radius * np.sqrt(np.maximum(w, 0))[:, None] * np.stack([np.cos(th), np.sin(th)]))
+
+
 def plot_gaussian_grid(res, gauss, path):
     """Heat maps of the final policies' return over ``GRID_PAIR`` (mean over seeds), uniform DR and
     LSDR, with the learned Gaussian's 68/95/99% confidence regions of that pair (seed 0)."""
@@ -315,10 +322,8 @@ def plot_gaussian_grid(res, gauss, path):
             order = list(gauss["names"])
             i, j = order.index(names[0]), order.index(names[1])
             m, c = gauss["mean"][-1, 0][[i, j]], gauss["cov"][-1, 0][np.ix_([i, j], [i, j])]
-            w, vec = np.linalg.eigh(c)
-            th = np.linspace(0, 2 * np.pi, 100)
             for conf, chi2 in ((68, 2.279), (95, 5.991), (99, 9.210)):  # chi-square(2) quantiles
-                e = vec @ (np.sqrt(chi2 * np.maximum(w, 0))[:, None] * np.stack([np.cos(th), np.sin(th)]))
+                e = ellipse(c, np.sqrt(chi2))
                 ax.plot(m[0] + e[0], m[1] + e[1], "w", lw=1)
                 ax.annotate(f"{conf}%", (m[0] + e[0, 25], m[1] + e[1, 25]), color="w", fontsize=7)
             ax.set_xlim(u[0] - du, u[-1] + du)
@@ -364,10 +369,7 @@ def part_plots(a, log):
         ax = axes[-1]
         i, j = 0, 2  # torso size vs friction
         for t, col in ((0, "0.6"), (len(mean) - 1, "C3")):
-            c = cov[t][np.ix_([i, j], [i, j])]
-            w, v = np.linalg.eigh(c)
-            th = np.linspace(0, 2 * np.pi, 100)
-            e = (v @ (2 * np.sqrt(np.maximum(w, 0))[:, None] * np.stack([np.cos(th), np.sin(th)])))
+            e = ellipse(cov[t][np.ix_([i, j], [i, j])], 2.0)
             ax.plot(mean[t, i] + e[0], mean[t, j] + e[1], color=col, label="start" if t == 0 else "end")
         ax.set_xlabel(names_g[i])
         ax.set_ylabel(names_g[j])

@@ -12,7 +12,8 @@ Two ways, for two kinds of function:
   data-dependent loops (MJX's solver iterations, ``while_loop``) stop when *that slice* has
   converged instead of waiting on a cross-device reduction every iteration. The faster of the two
   (hopper, 2 cores, one-off measurement outside the committed benchmark: 45k vs 30k env-steps/s
-  at 4,096 envs).
+  at 4,096 envs). ``env_slices`` is the same inside a larger jitted function (PPO's rollout with
+  ``ppo.split_envs``), with ``gather_whole`` to bring the results back whole.
 * ``shard_batch`` + ``jax.jit(..., out_shardings=batch_sharding(batch))`` -- for anything, including
   functions that reduce over the batch (a PPO update): XLA's partitioner inserts the
   communication.
@@ -62,9 +63,13 @@ def batch_devices(batch: int) -> list:
     return devs[:n]
 
 
+ENVS = PartitionSpec("batch")              # [B, ...]
+ENVS_OVER_TIME = PartitionSpec(None, "batch")  # [T, B, ...]
+
+
 def batch_sharding(batch: int) -> NamedSharding:
     """Sharding of arrays whose leading axis is the env batch ``[B, ...]`` over ``batch_devices``."""
-    return NamedSharding(Mesh(batch_devices(batch), ("batch",)), PartitionSpec("batch"))
+    return NamedSharding(Mesh(batch_devices(batch), ("batch",)), ENVS)
 
 
 def shard_batch(tree):
@@ -76,6 +81,32 @@ def shard_batch(tree):
     if len(sizes) != 1 or None in sizes:
         raise ValueError(f"shard_batch: every leaf needs the same leading batch axis, got {sorted(map(str, sizes))}")
     return jax.device_put(tree, batch_sharding(sizes.pop()))
+
+
+def env_slices(fn: Callable, batch: int, in_specs=ENVS, out_specs=ENVS) -> Callable:
+    """``fn`` run by each device on its slice of the env batch (``jax.shard_map``), callable inside
+    ``jit``; ``fn`` itself when only one device divides ``batch``.
+
+    ``fn`` must treat envs independently (a reduction over the batch would see one slice). The
+    specs (pytree prefixes of the arguments / outputs) name the env axis ``"batch"``: ``ENVS``
+    for ``[B, ...]`` leaves, ``ENVS_OVER_TIME`` for ``[T, B, ...]``.
+    """
+    mesh = batch_sharding(batch).mesh
+    if mesh.size == 1:
+        return fn
+    # check_vma=False: MJX's solver runs lax.cond inside scans whose branches return values that
+    # are not marked per-device, which the varying-axes check rejects; each slice's loop is
+    # independent here by construction (fn treats envs independently).
+    return jax.shard_map(fn, mesh=mesh, in_specs=in_specs, out_specs=out_specs, check_vma=False)
+
+
+def gather_whole(tree, batch: int):
+    """Inside ``jit``: every device holds all of ``tree`` (outputs of :func:`env_slices` with the
+    same ``batch``), so what follows runs as on one device; ``tree`` unchanged on one device."""
+    mesh = batch_sharding(batch).mesh
+    if mesh.size == 1:
+        return tree
+    return jax.lax.with_sharding_constraint(tree, NamedSharding(mesh, PartitionSpec()))
 
 
 def batch_map(fn: Callable, batch: int) -> Callable:
@@ -94,11 +125,7 @@ def batch_map(fn: Callable, batch: int) -> Callable:
     sharding = batch_sharding(batch)
     if sharding.mesh.size == 1:
         return jax.jit(fn)
-    # check_vma=False: MJX's solver runs lax.cond inside scans whose branches return values that
-    # are not marked per-device, which the varying-axes check rejects; each slice's loop is
-    # independent here by construction (fn treats envs independently).
-    mapped = jax.jit(jax.shard_map(fn, mesh=sharding.mesh, in_specs=sharding.spec, out_specs=sharding.spec,
-                                   check_vma=False))
+    mapped = jax.jit(env_slices(fn, batch))
 
     def run(*args):
         # a no-op for arguments already split this way (a previous call's outputs)

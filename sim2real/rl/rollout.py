@@ -9,8 +9,6 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from jax.sharding import NamedSharding, PartitionSpec
-
 from sim2real import parallel
 from sim2real.envs.autoreset import step_autoreset
 from sim2real.envs.base import Env, State
@@ -113,8 +111,8 @@ def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, k
     Every env draws from its own key (``[T, B]`` keys from ``key``), so the draws do not depend on
     how the batch is split. With ``split``, each of the host's devices that divide ``B`` (the CPU
     cores after ``parallel.use_cpu_cores()``) steps its own slice of the envs
-    (``parallel.batch_map``'s ``shard_map``); the returned batch is gathered whole for learning
-    and the runner stays split for the next call.
+    (``parallel.env_slices``); the returned batch is gathered whole for learning and the runner
+    stays split for the next call.
 
     Returns ``(runner, batch [T, B], stats)`` with ``stats`` holding the sums over episodes that
     ended in this batch (``return_sum``, ``length_sum``, ``episodes``) and ``diverged`` steps.
@@ -151,19 +149,14 @@ def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, k
     def roll(runner, keys):
         return jax.lax.scan(step, runner, keys)
 
-    keys = jax.random.split(key, (num_steps, num_envs))
-    sharding = parallel.batch_sharding(num_envs) if split else None
-    if sharding is not None and sharding.mesh.size > 1:
-        over_envs = PartitionSpec(None, "batch")  # [T, B, ...]
-        # check_vma=False: see parallel.batch_map (MJX's solver conds); envs are independent here
-        roll = jax.shard_map(roll, mesh=sharding.mesh, in_specs=(sharding.spec, over_envs),
-                             out_specs=(sharding.spec, over_envs), check_vma=False)
+    if split:
+        roll = parallel.env_slices(roll, num_envs, in_specs=(parallel.ENVS, parallel.ENVS_OVER_TIME),
+                                   out_specs=(parallel.ENVS, parallel.ENVS_OVER_TIME))
     carry0 = runner.carry
-    runner, (batch, ended) = roll(runner, keys)
-    if sharding is not None and sharding.mesh.size > 1:
+    runner, (batch, ended) = roll(runner, jax.random.split(key, (num_steps, num_envs)))
+    if split:
         # learning runs on the whole batch on every device (no cross-device reductions in the
         # loss, so the update is the one-device update)
-        whole = NamedSharding(sharding.mesh, PartitionSpec())
-        batch, ended = jax.lax.with_sharding_constraint((batch, ended), whole)
+        batch, ended = parallel.gather_whole((batch, ended), num_envs)
     stats = jax.tree_util.tree_map(jnp.sum, ended)
     return runner, batch.replace(carry0=carry0), stats
