@@ -5,6 +5,10 @@
 ``x`` (and optionally ``y``) are ``name=low:high:count`` or ``name=v1,v2,...``; other parameters
 stay at the run's fixed values. Writes ``<run>/eval/returns.csv`` and ``returns.png`` (the
 training DR box is outlined). All seeds of the run are evaluated and averaged.
+
+``adapt=true`` (ES-MAML runs) first adapts the policy to each grid cell with the run's
+adaptation operator (its inner PPO updates on that cell's physics), then evaluates (few-shot
+evaluation, seed 004 Fig. 1); the un-adapted returns go to ``returns_before.csv``.
 """
 import os
 import sys
@@ -14,6 +18,7 @@ from sim2real.cli import main_guard
 
 def main(argv):
     import jax
+    import jax.numpy as jnp
     import numpy as np
 
     from sim2real import config as config_lib
@@ -22,7 +27,7 @@ def main(argv):
     from sim2real.train import load_run
 
     _, args = config_lib.parse_args(argv)
-    known = {"run", "x", "y", "episodes", "out", "seed"}
+    known = {"run", "x", "y", "episodes", "out", "seed", "adapt"}
     for k in args:
         if k not in known:
             raise config_lib.ConfigError(f"unknown argument '{k}'; arguments: {', '.join(sorted(known))}")
@@ -33,22 +38,46 @@ def main(argv):
     zs, names = grid(env, axes, base=algo.space.base if hasattr(algo, "space") else None)
     env.check_z(zs)
     n_ep = int(args.get("episodes", 4))
+    adapt = bool(args.get("adapt", False))
+    if adapt and not hasattr(algo, "adapt"):
+        raise config_lib.ConfigError(f"adapt=true needs an algorithm with an adaptation operator "
+                                     f"(es_maml); run '{args['run']}' trained algo '{cfg.algo}'")
     key = jax.random.PRNGKey(int(args.get("seed", 123)))
-    rets = []
+    shape = [len(v) for v in axes.values()]
+
+    def cell_adapted(params, stats, z, k):
+        # the same U as in meta-training, then the deterministic test episodes
+        p2, s2, _ = algo.adapt(params, stats, z, jax.random.fold_in(k, 1))
+        return episodes(env, algo.ppo, p2, s2, z[None], k, n_ep)["return"].mean()
+
+    adapted = jax.jit(jax.vmap(cell_adapted, in_axes=(None, None, 0, None)))
+    rets, before = [], []
     for s in range(cfg.num_seeds):
         params, stats = algo.policy(jax.tree_util.tree_map(lambda x: x[s], state))
-        rets.append(np.asarray(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"]).mean(1))
-    ret = np.mean(rets, 0).reshape([len(v) for v in axes.values()])
+        before.append(np.asarray(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"]).mean(1))
+        if adapt:
+            rets.append(np.asarray(adapted(params, stats, jnp.asarray(zs), key)))
+    ret = np.mean(rets if adapt else before, 0).reshape(shape)
     out = str(args.get("out", os.path.join(str(args["run"]), "eval")))
     os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "returns.csv"), "w") as f:
-        f.write(",".join(names) + ",return\n")
-        for z, r in zip(zs, np.ravel(ret)):
-            f.write(",".join(f"{z[env.spec.index(n)]:.6g}" for n in names) + f",{r:.6g}\n")
+
+    def write(path, values):
+        tmp = path + ".tmp"
+        with open(tmp, "w") as f:
+            f.write(",".join(names) + ",return\n")
+            for z, r in zip(zs, np.ravel(values)):
+                f.write(",".join(f"{z[env.spec.index(n)]:.6g}" for n in names) + f",{r:.6g}\n")
+        os.replace(tmp, path)
+
+    write(os.path.join(out, "returns.csv"), ret)
+    if adapt:
+        write(os.path.join(out, "returns_before.csv"), np.mean(before, 0))
     box = {n: (lo, hi) for n, lo, hi in zip(cfg.dr.params, cfg.dr.low, cfg.dr.high)}
-    heatmap(axes, ret, os.path.join(out, "returns.png"), title=f"{cfg.name}: mean return", box=box)
+    title = f"{cfg.name}: mean return" + (" after adaptation" if adapt else "")
+    heatmap(axes, ret, os.path.join(out, "returns.png"), title=title, box=box)
     print(f"wrote {out}/returns.csv and returns.png; mean return {ret.mean():.1f}, "
-          f"min {ret.min():.1f}, max {ret.max():.1f}")
+          f"min {ret.min():.1f}, max {ret.max():.1f}"
+          + (f" (before adaptation {np.mean(before):.1f})" if adapt else ""))
 
 
 if __name__ == "__main__":

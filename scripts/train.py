@@ -14,7 +14,7 @@ def main(argv):
 
     cfg = config_lib.load(TrainConfig, argv)
     out = train(cfg)
-    last = {k: v for k, v in summary(out["metrics"]).items() if k in ("episode_return", "episode_length", "entropy")}
+    last = {k: v for k, v in summary(out["metrics"]).items() if k in ("episode_return", "episode_length", "entropy", "fitness_mean", "fitness_max")}
     print(f"run folder: {out['run_dir']}  last update: {last}")
 
 

@@ -34,10 +34,12 @@ class TrainConfig:
       name: run name; the run folder is ``out_dir/name``.
       env: env name (``sim2real.envs.names()``).
       env_options: EnvConfig overrides, e.g. ``{episode_length: 500}``.
-      algo: ``udr`` (uniform DR; fixed physics when ``dr.params`` is empty), ``lsdr``, ``epopt``.
+      algo: ``udr`` (uniform DR; fixed physics when ``dr.params`` is empty), ``lsdr`` (with
+        ``algo_options.epopt`` for EPOpt-PPO), ``fixed_dr`` (LSDR's harness, distribution frozen),
+        ``es_maml`` (one update = one meta-iteration; ``ppo`` is its inner loop).
       seed: base PRNG seed.
       num_seeds: independent seeds trained in parallel (vmapped).
-      total_steps: env steps per seed.
+      total_steps: env steps per seed (ES-MAML: the population's inner loops and scoring episodes).
       updates_per_chunk: PPO iterations per jitted chunk (logging/checkpoint granularity).
       checkpoint_every: chunks between checkpoints (the last chunk is always saved).
       keep_checkpoints: how many checkpoints to keep.
@@ -74,11 +76,25 @@ class TrainConfig:
 
     @property
     def num_updates(self) -> int:
+        """PPO updates in ``total_steps`` (what the PPO-based algorithms anneal over)."""
         return max(1, self.total_steps // self.ppo.batch_size)
 
     @property
     def num_chunks(self) -> int:
+        """Chunks of the PPO-based algorithms (``num_chunks(cfg, algo)`` for any algorithm)."""
         return -(-self.num_updates // self.updates_per_chunk)
+
+
+def steps_per_update(cfg: TrainConfig, algo) -> int:
+    """Env steps per seed in one ``algo.update``: the PPO batch, or what the algorithm reports."""
+    f = getattr(algo, "env_steps_per_update", None)
+    return int(f()) if f is not None else cfg.ppo.batch_size
+
+
+def num_chunks(cfg: TrainConfig, algo) -> int:
+    """Chunks of ``updates_per_chunk`` updates that cover ``total_steps`` (at least one update)."""
+    updates = max(1, cfg.total_steps // steps_per_update(cfg, algo))
+    return -(-updates // cfg.updates_per_chunk)
 
 
 def make_chunk(algo, updates: int):
@@ -151,7 +167,10 @@ def train(cfg: TrainConfig) -> dict:
     seeds = jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds)
     # created under jit, so the state's arrays have exactly the layout chunk outputs have
     # (an eagerly built state costs a second compilation of the chunk on CPU)
-    init = jax.jit(jax.vmap(algo.init))
+    init_fn = getattr(algo, "init_seeds", None) or jax.vmap(algo.init)  # init_seeds: warm starts
+    # strong dtypes: updates return strongly typed arrays, and a weakly typed leaf from init
+    # (evosax's) would make the second chunk compile again
+    init = jax.jit(lambda k: jax.tree_util.tree_map(lambda x: jax.lax.convert_element_type(x, x.dtype), init_fn(k)))
     chunk = make_chunk(algo, cfg.updates_per_chunk)
     state = init(seeds)
     mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints)
@@ -162,11 +181,11 @@ def train(cfg: TrainConfig) -> dict:
             raise FileNotFoundError(f"resume=true but '{run.ckpt_dir}' holds no checkpoint")
         state = checkpoint.restore(mngr, step, state)
         start = step
-    logger = MetricsLogger(run, cfg, resume_from_update=start * cfg.updates_per_chunk)
-    steps_per_update = cfg.ppo.batch_size
-    end = cfg.num_chunks if not cfg.max_chunks else min(cfg.num_chunks, start + cfg.max_chunks)
-    bar = Progress(cfg, total=cfg.num_chunks * cfg.updates_per_chunk * steps_per_update,
-                   done=start * cfg.updates_per_chunk * steps_per_update)
+    per_update, n_chunks = steps_per_update(cfg, algo), num_chunks(cfg, algo)
+    logger = MetricsLogger(run, cfg, resume_from_update=start * cfg.updates_per_chunk, steps_per_update=per_update)
+    end = n_chunks if not cfg.max_chunks else min(n_chunks, start + cfg.max_chunks)
+    bar = Progress(cfg, total=n_chunks * cfg.updates_per_chunk * per_update,
+                   done=start * cfg.updates_per_chunk * per_update)
     last = None
     try:
         for c in range(start, end):
@@ -179,8 +198,8 @@ def train(cfg: TrainConfig) -> dict:
             done_chunks = c + 1
             if done_chunks % cfg.checkpoint_every == 0 or done_chunks == end:
                 checkpoint.save(mngr, done_chunks, state)
-            bar.advance(cfg.updates_per_chunk * steps_per_update * cfg.num_seeds / dt,
-                        cfg.updates_per_chunk * steps_per_update, metrics)
+            bar.advance(cfg.updates_per_chunk * per_update * cfg.num_seeds / dt,
+                        cfg.updates_per_chunk * per_update, metrics)
     finally:
         mngr.wait_until_finished()
         bar.close()
@@ -192,8 +211,8 @@ def train(cfg: TrainConfig) -> dict:
 class MetricsLogger:
     """metrics.csv (one row per update and seed) and TensorBoard scalars (seed means)."""
 
-    def __init__(self, run: Run, cfg: TrainConfig, resume_from_update: int):
-        self.cfg, self.path = cfg, run.metrics_path
+    def __init__(self, run: Run, cfg: TrainConfig, resume_from_update: int, steps_per_update: int):
+        self.cfg, self.path, self.per_update = cfg, run.metrics_path, steps_per_update
         self.arrays_path = os.path.join(run.dir, "arrays.npz")
         self.arrays = {}
         if resume_from_update and os.path.exists(self.arrays_path):
@@ -244,14 +263,14 @@ class MetricsLogger:
             for j in range(k):
                 u = chunk_index * k + j
                 for s in range(cfg.num_seeds):
-                    w.writerow([u, s, (u + 1) * cfg.ppo.batch_size, f"{time.time() - self.t_start:.2f}"]
+                    w.writerow([u, s, (u + 1) * self.per_update, f"{time.time() - self.t_start:.2f}"]
                                + [f"{float(metrics[n][s, j]):.6g}" for n in names])
         if self.tb is not None:
             u = (chunk_index + 1) * k
             for n in names:
-                self.tb.add_scalar(n, float(np.nanmean(metrics[n][:, -1])), u * cfg.ppo.batch_size)
-            self.tb.add_scalar("steps_per_second", k * cfg.ppo.batch_size * cfg.num_seeds / seconds,
-                               u * cfg.ppo.batch_size)
+                self.tb.add_scalar(n, float(np.nanmean(metrics[n][:, -1])), u * self.per_update)
+            self.tb.add_scalar("steps_per_second", k * self.per_update * cfg.num_seeds / seconds,
+                               u * self.per_update)
 
     def _write_arrays(self, arrays: dict):
         """Array-valued metrics (e.g. LSDR's distribution) -> ``arrays.npz``, ``[seed, update, ...]``."""
@@ -289,6 +308,8 @@ class Progress:
         if ret is not None and eps is not None and eps[:, -1].sum() > 0:
             r = np.sum(ret * eps) / max(np.sum(eps), 1)
             info += f"  return {r:,.1f}"
+        elif "fitness_mean" in metrics:  # ES-MAML: return after adaptation, population mean
+            info += f"  fitness {np.mean(metrics['fitness_mean'][:, -1]):,.1f}"
         self.p.update(self.task, advance=steps, info=info)
 
     def close(self):

@@ -1,4 +1,7 @@
 """ES-MAML: the ES gradient estimate, the PPO adaptation operator, and the jitted, vmapped meta step."""
+import csv
+import os
+
 import jax
 import jax.flatten_util
 import jax.numpy as jnp
@@ -51,21 +54,83 @@ def test_inner_loop_adaptation_improves_return(esmaml):
     assert float(jnp.mean(after)) > float(jnp.mean(before)) + 5.0
 
 
-def test_meta_step_jits_and_vmaps_over_seeds():
-    # smaller than the fixture: this checks the meta step's plumbing, not that adaptation helps
+# small: the driver tests check the meta step's plumbing, not that adaptation helps
+DRIVER_BASE = ["env=prismatic", "env_options.episode_length=20", "progress=false", "tensorboard=false",
+               "ppo.num_envs=8", "ppo.num_steps=8", "ppo.num_minibatches=2", "ppo.num_epochs=1",
+               "ppo.net.hidden=[16,16]", "dr.params=[mass:carriage]", "dr.low=[50.0]", "dr.high=[150.0]"]
+
+
+def driver_config(out_dir, *extra):
+    from sim2real import config as config_lib
+    from sim2real.train import TrainConfig
+
+    return config_lib.load(TrainConfig, [f"out_dir={out_dir}", *DRIVER_BASE, *extra])
+
+
+def load_script(name):
+    import importlib.util
+
+    path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", f"{name}.py")
+    spec = importlib.util.spec_from_file_location(f"script_{name}", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def udr_run(tmp_path_factory):
+    """A finished 1-seed uniform-DR run: the warm start of the driver tests."""
+    from sim2real.train import train
+
+    return train(driver_config(tmp_path_factory.mktemp("udr"), "name=udr", "total_steps=128"))
+
+
+def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tmp_path, udr_run):
+    """algo=es_maml through scripts/train.py's driver: the jitted meta step vmapped over 2 seeds,
+    warm-started from a 1-seed uniform-DR run, interrupted and resumed = uninterrupted."""
+    from sim2real.train import train
+
+    per_update = 4 * (2 * 64 + 20)  # population x (inner updates x batch + one 20-step scoring episode)
+    es = ["algo=es_maml", "num_seeds=2", "updates_per_chunk=1", f"total_steps={2 * per_update}",
+          f"algo_options={{population: 4, inner_updates: 2, warm_start: {udr_run['run_dir']}}}"]
+    full = train(driver_config(tmp_path, *es, "name=full"))
+    train(driver_config(tmp_path, *es, "name=part", "max_chunks=1"))
+    resumed = train(driver_config(tmp_path, *es, "name=part", "resume=true"))
+
+    theta = lambda out: np.asarray(jax.vmap(lambda s: jax.flatten_util.ravel_pytree(out["algo"].theta(s))[0])(
+        out["state"]))                                                           # [S, n]
+    warm = np.asarray(jax.flatten_util.ravel_pytree(udr_run["state"].params)[0])  # 1 seed
+    t = theta(full)
+    assert t.shape == (2, warm.size) and np.all(np.isfinite(t))
+    assert np.abs(t - warm[None]).max(1).min() > 0              # both seeds moved from the warm start
+    assert not np.allclose(t[0], t[1])                          # seeds differ
+    np.testing.assert_array_equal(theta(resumed), t)            # resume == uninterrupted
+    assert np.asarray(full["state"].step).tolist() == [2, 2]
+    rows = list(csv.DictReader(open(os.path.join(full["run_dir"], "metrics.csv"))))
+    assert [int(r["env_steps"]) for r in rows if r["seed"] == "0"] == [per_update, 2 * per_update]
+    assert all(np.isfinite(float(r["fitness_mean"])) for r in rows)
+
+    # few-shot evaluation of the run over a physics grid (scripts/evaluate.py adapt=true)
+    evaluate = load_script("evaluate")
+    evaluate.main([f"run={full['run_dir']}", "adapt=true", "x=mass:carriage=60,140", "episodes=1"])
+    for name in ("returns.csv", "returns_before.csv"):
+        table = np.loadtxt(os.path.join(full["run_dir"], "eval", name), delimiter=",", skiprows=1)
+        assert table.shape == (2, 2) and np.all(np.isfinite(table[:, 1]))
+    with pytest.raises(Exception, match="adaptation operator"):  # a UDR run has none
+        evaluate.main([f"run={udr_run['run_dir']}", "adapt=true", "x=mass:carriage=60,140"])
+
+
+def test_warm_start_must_match_the_network(tmp_path, udr_run):
+    from sim2real.algos import registry
+
     env = make("prismatic", episode_length=20)
-    dr = DRConfig(params=("mass:carriage",), low=(50.0,), high=(150.0,))
-    esmaml = ESMAML(env, PPOConfig(num_envs=8, num_steps=8, num_minibatches=2, num_epochs=1), dr,
-                    ESMAMLConfig(population=4, inner_updates=2))
-    st = jax.jit(jax.vmap(esmaml.init))(jax.random.split(jax.random.PRNGKey(0), 2))
-    st2, m = jax.jit(jax.vmap(esmaml.update))(st)
-    assert m["fitness_mean"].shape == (2,) and np.all(np.isfinite(np.asarray(m["fitness_mean"])))
-    flat = lambda st, i: jax.flatten_util.ravel_pytree(
-        jax.tree_util.tree_map(lambda x: x[i], jax.vmap(esmaml.theta)(st)))[0]
-    assert float(jnp.abs(flat(st2, 0) - flat(st, 0)).max()) > 0  # theta moved
-    a, b = flat(st2, 0), flat(st2, 1)
-    assert not np.allclose(np.asarray(a), np.asarray(b))  # seeds differ
-    assert int(st2.step[0]) == 1
+    cfg = driver_config(tmp_path, "algo=es_maml", "ppo.net.hidden=[8,8]",
+                        f"algo_options={{population: 4, warm_start: {udr_run['run_dir']}}}")
+    with pytest.raises(ValueError, match="network"):
+        registry.build("es_maml", env, cfg)
+    cfg = driver_config(tmp_path, "algo=es_maml", f"algo_options.warm_start={tmp_path}/nothing")
+    with pytest.raises(FileNotFoundError, match="nothing"):
+        registry.build("es_maml", env, cfg)
 
 
 def test_bad_config_is_named():

@@ -30,6 +30,7 @@ from evosax.algorithms import Open_ES
 from flax import struct
 
 from sim2real.algos.base import DRConfig, DRSpace
+from sim2real.algos.registry import register
 from sim2real.envs.base import Env
 from sim2real.evaluate import episodes
 from sim2real.rl import networks, normalize
@@ -48,6 +49,9 @@ class ESMAMLConfig:
       inner_updates: PPO updates of the adaptation operator (seed 004: 3).
       eval_episodes: deterministic episodes that score an adapted member.
       eval_horizon: steps of those episodes (0: the env's episode length).
+      warm_start: a training run folder whose ``policy.msgpack`` (same env and network) gives the
+        initial meta-parameters and observation statistics, one per seed or one for all seeds
+        (seed 004's budget-scaled runs start from a uniform-DR policy); empty: random init.
     """
 
     population: int = 32
@@ -56,6 +60,7 @@ class ESMAMLConfig:
     inner_updates: int = 3
     eval_episodes: int = 1
     eval_horizon: int = 0
+    warm_start: str = ""
 
 
 @struct.dataclass
@@ -87,6 +92,7 @@ class ESMAML:
         self.es = Open_ES(population_size=cfg.population, solution=template, use_antithetic_sampling=True,
                           optimizer=optax.adam(cfg.meta_lr), std_schedule=optax.constant_schedule(cfg.sigma))
         self.es_params = self.es.default_params
+        self.warm = None  # (params [S, ...], obs_stats [S, ...]) set by ``load_warm_start``
 
     # ----------------------------------------------------------------------------------------
     def sample_task(self, key):
@@ -103,8 +109,39 @@ class ESMAML:
         stats = normalize.init(self.env.obs_size) if obs_stats is None else obs_stats
         return ESMAMLState(self.es.init(k_es, params, self.es_params), stats, k_next, jnp.zeros((), jnp.int32))
 
+    def init_seeds(self, keys):
+        """``init`` for every seed's key ``[S, 2]``, from the warm start when one is loaded."""
+        if self.warm is None:
+            return jax.vmap(self.init)(keys)
+        return jax.vmap(self.init)(keys, *self.warm)
+
+    def load_warm_start(self, run_dir: str, num_seeds: int) -> None:
+        """Meta-parameters from a finished run's ``policy.msgpack``, checked against this ES-MAML."""
+        import os
+
+        from sim2real.train import load_policy
+
+        if not os.path.exists(os.path.join(run_dir, "policy.msgpack")):
+            raise FileNotFoundError(f"algo_options.warm_start: '{run_dir}' holds no policy.msgpack "
+                                    "(give the folder of a finished training run)")
+        wcfg, wenv, _, params, stats = load_policy(run_dir)
+        if wenv.name != self.env.name or wenv.obs_size != self.env.obs_size:
+            raise ValueError(f"warm_start '{run_dir}' trained env '{wenv.name}' (obs {wenv.obs_size}), "
+                             f"this ES-MAML runs '{self.env.name}' (obs {self.env.obs_size})")
+        if wcfg.ppo.net != self.ppo.cfg.net:
+            raise ValueError(f"warm_start '{run_dir}' has network {wcfg.ppo.net}, this ES-MAML has "
+                             f"ppo.net = {self.ppo.cfg.net}; set the same ppo.net")
+        n = jax.tree_util.tree_leaves(params)[0].shape[0]
+        if n not in (1, num_seeds):
+            raise ValueError(f"warm_start '{run_dir}' holds {n} seeds; this run has num_seeds={num_seeds} "
+                             f"(give a run with 1 or {num_seeds} seeds)")
+        tile = lambda x: jnp.repeat(jnp.asarray(x), num_seeds // n, axis=0)
+        self.warm = jax.tree_util.tree_map(tile, (params, stats))
+
     def theta(self, st: ESMAMLState):
-        """Meta-parameters as the network's pytree."""
+        """Meta-parameters as the network's pytree (with the state's leading seed axes, if any)."""
+        if st.es.mean.ndim > 1:  # the driver exports the policies of all seeds at once
+            return jax.vmap(self.theta)(st)
         return self.es.get_mean(st.es)
 
     # ------------------------------------------------------------------- adaptation U ----
@@ -176,3 +213,16 @@ def grad_estimate(es: Open_ES, es_params, es_state, fitness_fn, key):
     mean = jax.flatten_util.ravel_pytree(es.get_mean(es_state))[0]
     g = (flat_pop - mean) / es_state.std
     return jax.vmap(fitness_fn)(pop) @ g / (es.population_size * es_state.std)
+
+
+def _build(env, cfg):
+    from sim2real import config as config_lib
+
+    opts = config_lib.from_dict(ESMAMLConfig, cfg.algo_options, "algo_options.")
+    algo = ESMAML(env, cfg.ppo, cfg.dr, opts)
+    if opts.warm_start:
+        algo.load_warm_start(opts.warm_start, cfg.num_seeds)
+    return algo
+
+
+register("es_maml", _build)
