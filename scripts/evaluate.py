@@ -4,7 +4,8 @@
 
 ``x`` (and optionally ``y``) are ``name=low:high:count`` or ``name=v1,v2,...``; other parameters
 stay at the run's fixed values. Writes ``<run>/eval/returns.csv`` and ``returns.png`` (the
-training DR box is outlined). All seeds of the run are evaluated and averaged.
+training DR box is outlined). All seeds of the run are evaluated and averaged. The latest
+checkpoint is evaluated, or ``policy.msgpack`` where the folder has no ``checkpoints/``.
 
 ``adapt=true`` (ES-MAML runs) first adapts the policy to each grid cell with the run's
 adaptation operator (its inner PPO updates on that cell's physics), then evaluates (few-shot
@@ -24,7 +25,7 @@ def main(argv):
     from sim2real import config as config_lib
     from sim2real.evaluate import episodes, grid, parse_axis
     from sim2real.plots import heatmap
-    from sim2real.train import load_run
+    from sim2real.train import load_policy, load_run
 
     _, args = config_lib.parse_args(argv)
     known = {"run", "x", "y", "episodes", "out", "seed", "adapt"}
@@ -33,7 +34,12 @@ def main(argv):
             raise config_lib.ConfigError(f"unknown argument '{k}'; arguments: {', '.join(sorted(known))}")
     if "run" not in args or "x" not in args:
         raise config_lib.ConfigError("evaluate needs run=RUN_DIR and x=name=low:high:count")
-    cfg, env, algo, state = load_run(str(args["run"]))
+    run = str(args["run"])
+    if os.path.isdir(os.path.join(run, "checkpoints")):
+        cfg, env, algo, state = load_run(run)
+        all_params, all_stats = algo.policy(state)           # leading seed axis
+    else:  # a run folder copied without its checkpoints: the exported policies
+        cfg, env, algo, all_params, all_stats = load_policy(run)
     axes = dict([parse_axis(str(args["x"]))] + ([parse_axis(str(args["y"]))] if "y" in args else []))
     zs, names = grid(env, axes, base=algo.space.base if hasattr(algo, "space") else None)
     env.check_z(zs)
@@ -53,7 +59,7 @@ def main(argv):
     adapted = jax.jit(jax.vmap(cell_adapted, in_axes=(None, None, 0, None)))
     rets, before = [], []
     for s in range(cfg.num_seeds):
-        params, stats = algo.policy(jax.tree_util.tree_map(lambda x: x[s], state))
+        params, stats = jax.tree_util.tree_map(lambda x: x[s], (all_params, all_stats))
         before.append(np.asarray(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"]).mean(1))
         if adapt:
             rets.append(np.asarray(adapted(params, stats, jnp.asarray(zs), key)))

@@ -111,10 +111,16 @@ def make_chunk(algo, updates: int):
         return jax.vmap(lambda s: algo.update(s, i) if takes_index else algo.update(s))(c)
 
     def chunk(state, first):
-        state, metrics = jax.lax.scan(body, state, first + jnp.arange(updates))
-        return state, jax.tree_util.tree_map(lambda x: jnp.swapaxes(x, 0, 1), metrics)
+        state, metrics = jax.lax.scan(body, strong_types(state), first + jnp.arange(updates))
+        return strong_types(state), jax.tree_util.tree_map(lambda x: jnp.swapaxes(x, 0, 1), metrics)
 
     return jax.jit(chunk)
+
+
+def strong_types(tree):
+    """The same arrays without weak types. The state goes in and out of the jitted chunk; a weakly
+    typed leaf (evosax makes some) changes its input signature and compiles the chunk again."""
+    return jax.tree_util.tree_map(lambda x: jax.lax.convert_element_type(x, jnp.asarray(x).dtype), tree)
 
 
 def build_algo(cfg: TrainConfig, env):
@@ -168,9 +174,7 @@ def train(cfg: TrainConfig) -> dict:
     # created under jit, so the state's arrays have exactly the layout chunk outputs have
     # (an eagerly built state costs a second compilation of the chunk on CPU)
     init_fn = getattr(algo, "init_seeds", None) or jax.vmap(algo.init)  # init_seeds: warm starts
-    # strong dtypes: updates return strongly typed arrays, and a weakly typed leaf from init
-    # (evosax's) would make the second chunk compile again
-    init = jax.jit(lambda k: jax.tree_util.tree_map(lambda x: jax.lax.convert_element_type(x, x.dtype), init_fn(k)))
+    init = jax.jit(lambda k: strong_types(init_fn(k)))
     chunk = make_chunk(algo, cfg.updates_per_chunk)
     state = init(seeds)
     mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints)
@@ -340,7 +344,7 @@ def load_policy(run_dir: str):
     env = make(cfg.env, **cfg.env_options)
     algo = build_algo(cfg, env)
     template = jax.eval_shape(jax.vmap(algo.init), jax.random.split(jax.random.PRNGKey(0), cfg.num_seeds))
-    params, stats = algo.policy(template)
+    params, stats = jax.eval_shape(algo.policy, template)
     zeros = jax.tree_util.tree_map(lambda x: np.zeros(x.shape, x.dtype), {"params": params, "obs_stats": stats})
     path = os.path.join(run_dir, "policy.msgpack")
     if not os.path.exists(path):
@@ -370,10 +374,12 @@ def summary(metrics: dict) -> dict:
     """Means over seeds and updates; episode statistics weighted by the episodes that ended."""
     out = {k: float(jnp.mean(v)) for k, v in metrics.items()}
     eps = np.asarray(metrics.get("episodes", 0))
-    if np.sum(eps) > 0:
-        for k in ("episode_return", "episode_length"):
-            if k in metrics:
+    for k in ("episode_return", "episode_length"):
+        if k in metrics:
+            if np.sum(eps) > 0:
                 out[k] = float(np.sum(np.asarray(metrics[k]) * eps) / np.sum(eps))
+            else:  # no episode ended in these updates: there is no episode statistic to report
+                del out[k]
     return out
 
 

@@ -1,4 +1,6 @@
 """Config files and key=value overrides, including the errors users see."""
+import os
+
 import pytest
 
 from sim2real import config as config_lib
@@ -45,3 +47,22 @@ def test_roundtrip(tmp_path):
     cfg = config_lib.load(TrainConfig, ["ppo.net.kind=lstm", "dr.fixed={gravity: 9.0}"])
     config_lib.save(cfg, tmp_path / "c.yaml")
     assert config_lib.load(TrainConfig, [f"config={tmp_path / 'c.yaml'}"]) == cfg
+
+
+def test_every_bundled_training_config_builds_its_algorithm():
+    """configs/*.yaml (training ones): keys valid, env and algorithm built (ES-MAML without its warm start,
+    which points at a run the user trains first)."""
+    import glob
+
+    from sim2real.envs import make
+    from sim2real.train import TrainConfig, build_algo
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    paths = [p for p in sorted(glob.glob(os.path.join(root, "configs", "*.yaml"))) if "simopt" not in os.path.basename(p)]
+    assert len(paths) >= 6
+    for p in paths:
+        cfg = config_lib.load(TrainConfig, [f"config={p}"])
+        if cfg.algo == "es_maml":
+            cfg = config_lib.load(TrainConfig, [f"config={p}", "algo_options.warm_start=''"])
+        algo = build_algo(cfg, make(cfg.env, **cfg.env_options))
+        assert algo is not None, p

@@ -1,6 +1,7 @@
 """ES-MAML: the ES gradient estimate, the PPO adaptation operator, and the jitted, vmapped meta step."""
 import csv
 import os
+import shutil
 
 import jax
 import jax.flatten_util
@@ -116,6 +117,12 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
     for name in ("returns.csv", "returns_before.csv"):
         table = np.loadtxt(os.path.join(full["run_dir"], "eval", name), delimiter=",", skiprows=1)
         assert table.shape == (2, 2) and np.all(np.isfinite(table[:, 1]))
+    # a run folder without checkpoints is evaluated from its exported policies: same numbers
+    part = os.path.join(str(tmp_path), "part")
+    shutil.rmtree(os.path.join(part, "checkpoints"))
+    evaluate.main([f"run={part}", "adapt=true", "x=mass:carriage=60,140", "episodes=1"])
+    for name in ("returns.csv", "returns_before.csv"):
+        assert open(os.path.join(part, "eval", name)).read() == open(os.path.join(full["run_dir"], "eval", name)).read()
     with pytest.raises(Exception, match="adaptation operator"):  # a UDR run has none
         evaluate.main([f"run={udr_run['run_dir']}", "adapt=true", "x=mass:carriage=60,140"])
 

@@ -134,7 +134,7 @@ class ESMAML:
         n = jax.tree_util.tree_leaves(params)[0].shape[0]
         if n not in (1, num_seeds):
             raise ValueError(f"warm_start '{run_dir}' holds {n} seeds; this run has num_seeds={num_seeds} "
-                             f"(give a run with 1 or {num_seeds} seeds)")
+                             f"(set num_seeds={n}, or warm-start from a run with one seed)")
         tile = lambda x: jnp.repeat(jnp.asarray(x), num_seeds // n, axis=0)
         self.warm = jax.tree_util.tree_map(tile, (params, stats))
 
