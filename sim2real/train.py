@@ -167,7 +167,7 @@ def train(cfg: TrainConfig) -> dict:
     if cfg.ppo.split_envs:  # (on a GPU host the CPU device count changes nothing)
         _use_cpu_cores()
     env = make(cfg.env, **cfg.env_options)
-    algo = build_algo(cfg, env)
+    algo = build_algo(_without_warm_start(cfg) if cfg.resume else cfg, env)  # resume: the checkpoint is the start
     run = Run(cfg)
     run.prepare()
     seeds = jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds)
@@ -336,13 +336,21 @@ def export_policy(algo, state, path: str) -> None:
     os.replace(tmp, path)
 
 
+def _without_warm_start(cfg: TrainConfig) -> TrainConfig:
+    """A saved run's config for loading it: its trained state replaces any warm start, so the
+    warm start's source need not exist any more."""
+    if "warm_start" not in cfg.algo_options:
+        return cfg
+    return dataclasses.replace(cfg, algo_options={k: v for k, v in cfg.algo_options.items() if k != "warm_start"})
+
+
 def load_policy(run_dir: str):
     """``(cfg, env, algo, params, obs_stats)`` from a run folder's ``policy.msgpack`` (leading seed axis)."""
     from flax import serialization
 
     cfg = config_lib.load(TrainConfig, [f"config={os.path.join(run_dir, 'config.yaml')}"])
     env = make(cfg.env, **cfg.env_options)
-    algo = build_algo(cfg, env)
+    algo = build_algo(_without_warm_start(cfg), env)
     template = jax.eval_shape(jax.vmap(algo.init), jax.random.split(jax.random.PRNGKey(0), cfg.num_seeds))
     params, stats = jax.eval_shape(algo.policy, template)
     zeros = jax.tree_util.tree_map(lambda x: np.zeros(x.shape, x.dtype), {"params": params, "obs_stats": stats})
@@ -358,7 +366,7 @@ def load_run(run_dir: str, step: int | None = None):
     """Config, env, algorithm and restored state of a run folder (for evaluation)."""
     cfg = config_lib.load(TrainConfig, [f"config={os.path.join(run_dir, 'config.yaml')}"])
     env = make(cfg.env, **cfg.env_options)
-    algo = build_algo(cfg, env)
+    algo = build_algo(_without_warm_start(cfg), env)
     template = jax.jit(jax.vmap(algo.init))(jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds))
     ckpt = os.path.join(run_dir, "checkpoints")
     if not os.path.isdir(ckpt):

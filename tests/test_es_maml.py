@@ -120,6 +120,10 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
     # a run folder without checkpoints is evaluated from its exported policies: same numbers
     part = os.path.join(str(tmp_path), "part")
     shutil.rmtree(os.path.join(part, "checkpoints"))
+    cfg_path = os.path.join(part, "config.yaml")  # ... and needs no longer the run it was warm-started from
+    text = open(cfg_path).read()
+    assert udr_run["run_dir"] in text
+    open(cfg_path, "w").write(text.replace(udr_run["run_dir"], os.path.join(str(tmp_path), "gone")))
     evaluate.main([f"run={part}", "adapt=true", "x=mass:carriage=60,140", "episodes=1"])
     for name in ("returns.csv", "returns_before.csv"):
         assert open(os.path.join(part, "eval", name)).read() == open(os.path.join(full["run_dir"], "eval", name)).read()
