@@ -111,7 +111,7 @@ def make_chunk(algo, updates: int):
         return jax.vmap(lambda s: algo.update(s, i) if takes_index else algo.update(s))(c)
 
     def chunk(state, first):
-        state, metrics = jax.lax.scan(body, strong_types(state), first + jnp.arange(updates))
+        state, metrics = jax.lax.scan(body, state, first + jnp.arange(updates))
         return strong_types(state), jax.tree_util.tree_map(lambda x: jnp.swapaxes(x, 0, 1), metrics)
 
     return jax.jit(chunk)
@@ -348,15 +348,15 @@ def load_policy(run_dir: str):
     """``(cfg, env, algo, params, obs_stats)`` from a run folder's ``policy.msgpack`` (leading seed axis)."""
     from flax import serialization
 
+    path = os.path.join(run_dir, "policy.msgpack")
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"no policy.msgpack in '{run_dir}' (was the run finished?)")
     cfg = config_lib.load(TrainConfig, [f"config={os.path.join(run_dir, 'config.yaml')}"])
     env = make(cfg.env, **cfg.env_options)
     algo = build_algo(_without_warm_start(cfg), env)
     template = jax.eval_shape(jax.vmap(algo.init), jax.random.split(jax.random.PRNGKey(0), cfg.num_seeds))
     params, stats = jax.eval_shape(algo.policy, template)
     zeros = jax.tree_util.tree_map(lambda x: np.zeros(x.shape, x.dtype), {"params": params, "obs_stats": stats})
-    path = os.path.join(run_dir, "policy.msgpack")
-    if not os.path.exists(path):
-        raise FileNotFoundError(f"no policy.msgpack in '{run_dir}' (was the run finished?)")
     with open(path, "rb") as f:
         d = serialization.from_bytes(zeros, f.read())
     return cfg, env, algo, d["params"], d["obs_stats"]

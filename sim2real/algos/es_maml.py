@@ -117,14 +117,12 @@ class ESMAML:
 
     def load_warm_start(self, run_dir: str, num_seeds: int) -> None:
         """Meta-parameters from a finished run's ``policy.msgpack``, checked against this ES-MAML."""
-        import os
-
         from sim2real.train import load_policy
 
-        if not os.path.exists(os.path.join(run_dir, "policy.msgpack")):
-            raise FileNotFoundError(f"algo_options.warm_start: '{run_dir}' holds no policy.msgpack "
-                                    "(give the folder of a finished training run)")
-        wcfg, wenv, _, params, stats = load_policy(run_dir)
+        try:
+            wcfg, wenv, _, params, stats = load_policy(run_dir)
+        except FileNotFoundError as e:
+            raise FileNotFoundError(f"algo_options.warm_start: {e}") from e
         if wenv.name != self.env.name or wenv.obs_size != self.env.obs_size:
             raise ValueError(f"warm_start '{run_dir}' trained env '{wenv.name}' (obs {wenv.obs_size}), "
                              f"this ES-MAML runs '{self.env.name}' (obs {self.env.obs_size})")
