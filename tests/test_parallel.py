@@ -74,6 +74,12 @@ SCRIPT = textwrap.dedent("""
     for a, b in ((b1.obs, b2.obs), (b1.action, b2.action), (b1.reward, b2.reward), (b1.z, b2.z)):
         np.testing.assert_allclose(np.asarray(b), np.asarray(a), rtol=1e-5, atol=1e-5)
     assert len(np.unique(np.asarray(b1.z)[:, :, i_mass])) > B  # resets drew new masses
+    # called eagerly, on a runner built eagerly (committed to one device): the same batch
+    eager = init_runner(env, jax.random.PRNGKey(3), B, sample, 0)
+    r3, b3, s3 = collect(env, net, params, stats, Context.empty(), eager, jax.random.PRNGKey(4), sample, 40,
+                         split=True)
+    assert len(r3.z.sharding.device_set) == 2, r3.z.sharding
+    np.testing.assert_allclose(np.asarray(b3.obs), np.asarray(b1.obs), rtol=1e-5, atol=1e-5)
     try:
         parallel.shard_batch({"a": jnp.zeros(4), "b": jnp.zeros(3)})
     except ValueError as e:

@@ -118,6 +118,12 @@ def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, k
     ended in this batch (``return_sum``, ``length_sum``, ``episodes``) and ``diverged`` steps.
     """
     num_envs = runner.z.shape[0]
+    if split and not any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((runner, key))):
+        # an eager call: arrays built eagerly are committed to one device, which the per-device
+        # slices cannot read; place the runner split and run the whole collection under jit
+        whole = lambda r, k: collect(env, net, params, obs_stats, ctx_fn, r, k, sample, num_steps,
+                                     deterministic, split)
+        return jax.jit(whole)(parallel.shard_batch(runner), key)
     policy = jax.vmap(net.apply, in_axes=(None, 0, 0, 0, 0))
     per_env = jax.vmap(lambda k: jax.random.split(k), out_axes=1)  # [B] keys -> 2 x [B] keys
 
