@@ -63,7 +63,7 @@ def run(cfg, chunks_between_evals: int = 0, evaluate=None, state=None, log=print
     import jax
 
     from sim2real.envs import make
-    from sim2real.train import build_algo, make_chunk
+    from sim2real.train import build_algo, make_chunk, num_chunks
 
     env = make(cfg.env, **cfg.env_options)
     algo = build_algo(cfg, env)
@@ -75,9 +75,10 @@ def run(cfg, chunks_between_evals: int = 0, evaluate=None, state=None, log=print
     else:
         state = fresh
     chunk = make_chunk(algo, cfg.updates_per_chunk)
+    n_chunks = num_chunks(cfg, algo)
     rows, probs, dists = [], [], []
     t0 = time.time()
-    for c in range(cfg.num_chunks):
+    for c in range(n_chunks):
         if evaluate is not None and chunks_between_evals and c % chunks_between_evals == 0:
             rows.append({"chunk": c, "env_steps": c * cfg.updates_per_chunk * cfg.ppo.batch_size,
                          **evaluate(algo, env, state)})
@@ -92,10 +93,10 @@ def run(cfg, chunks_between_evals: int = 0, evaluate=None, state=None, log=print
             probs.append(m["dist_probs"][:, -1])  # [S, D, bins] at the chunk's end
         if "dist_mean" in m:
             dists.append((m["dist_mean"][:, -1], m["dist_cov"][:, -1]))
-        if evaluate is not None and chunks_between_evals and c == cfg.num_chunks - 1:
+        if evaluate is not None and chunks_between_evals and c == n_chunks - 1:
             row.update(evaluate(algo, env, state))
         rows.append(row)
-        log(f"  chunk {c + 1}/{cfg.num_chunks}: {row['env_steps']:,} steps, train return "
+        log(f"  chunk {c + 1}/{n_chunks}: {row['env_steps']:,} steps, train return "
             f"{row['train_return']:.0f}, {row['wall_seconds']:.0f} s")
     return state, rows, (np.stack(probs) if probs else None), dists, algo, env
 
@@ -240,7 +241,7 @@ def part_gaussian(a, log):
                       f"algo_options.center={a.center}", f"algo_options.lr={a.dist_lr}",
                       f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
                       f"updates_per_chunk={a.chunk}"], a.steps, a)
-        _, rows, _, dists, _, _ = run(cfg, cfg.num_chunks, evaluate, log=log)
+        _, rows, _, dists, _, _ = run(cfg, sys.maxsize, evaluate, log=log)  # evaluate first and last
         final = rows[-1]
         log(f"  grid return {final['test_return']:.0f} (mean over {len(grid)} contexts and {a.seeds} seeds)")
         result[algo] = {"test_grid": final["test_grid"], "test_return": final["test_return"],

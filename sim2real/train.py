@@ -79,11 +79,6 @@ class TrainConfig:
         """PPO updates in ``total_steps`` (what the PPO-based algorithms anneal over)."""
         return max(1, self.total_steps // self.ppo.batch_size)
 
-    @property
-    def num_chunks(self) -> int:
-        """Chunks of the PPO-based algorithms (``num_chunks(cfg, algo)`` for any algorithm)."""
-        return -(-self.num_updates // self.updates_per_chunk)
-
 
 def steps_per_update(cfg: TrainConfig, algo) -> int:
     """Env steps per seed in one ``algo.update``: the PPO batch, or what the algorithm reports."""
