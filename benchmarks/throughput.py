@@ -49,18 +49,13 @@ def _timed(roll, carry):
     return time_best(lambda: roll(*carry))
 
 
-def _split(keys, n=2):
-    """``n`` key arrays ``[B, 2]`` from per-env keys ``[B, 2]``."""
-    return jax.vmap(lambda k: jax.random.split(k, n), out_axes=1)(keys)
-
-
 def _random_actions(keys, size):
     """Per-env uniform actions ``[B, size]`` and the next keys ``[B, 2]`` from per-env keys ``[B, 2]``.
 
     Per-env keys (not one key for the batch) keep the draws independent of how the batch is split
     over devices, and let each device draw only its own slice.
     """
-    keys, ka = _split(keys)
+    keys, ka = parallel.split_keys(keys)
     a = jax.vmap(lambda k: jax.random.uniform(k, (size,), minval=-1, maxval=1))(ka)
     return a, keys
 
@@ -92,7 +87,7 @@ def bench_sim2real(batch: int, steps: int, split: bool = True) -> float:
         def f(c, _):
             s, zz, k = c
             a, k = _random_actions(k, env.action_size)
-            k, ks = _split(k)
+            k, ks = parallel.split_keys(k)
             return (*step(s, zz, a, ks), k), None
 
         return jax.lax.scan(f, (state, z, keys), None, length=steps)[0]

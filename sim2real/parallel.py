@@ -63,6 +63,15 @@ def batch_devices(batch: int) -> list:
     return devs[:n]
 
 
+def split_keys(keys, n: int = 2):
+    """Per-env keys ``[B, 2]`` -> ``n`` arrays of per-env keys ``[B, 2]`` (a leading axis of ``n``).
+
+    Every env draws from its own key, so the draws do not depend on how the batch is split over
+    devices and each device draws only its own slice.
+    """
+    return jax.vmap(lambda k: jax.random.split(k, n), out_axes=1)(keys)
+
+
 ENVS = PartitionSpec("batch")              # [B, ...]
 ENVS_OVER_TIME = PartitionSpec(None, "batch")  # [T, B, ...]
 

@@ -125,11 +125,10 @@ def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, k
                                      deterministic, split)
         return jax.jit(whole)(parallel.shard_batch(runner), key)
     policy = jax.vmap(net.apply, in_axes=(None, 0, 0, 0, 0))
-    per_env = jax.vmap(lambda k: jax.random.split(k), out_axes=1)  # [B] keys -> 2 x [B] keys
 
     def step(r: Runner, k):
         n = r.z.shape[0]  # this device's slice of the envs
-        k_act, k_env = per_env(k)
+        k_act, k_env = parallel.split_keys(k)
         obs = normalize.apply(obs_stats, r.env_state.obs)
         ctx = ctx_fn(r.z)
         (mean, log_std, value), carry = policy(params, obs, ctx, r.carry, r.first)
