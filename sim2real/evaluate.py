@@ -11,6 +11,39 @@ from sim2real.rl.ppo import PPO
 from sim2real.rl.rollout import to_ctrl
 
 
+def closed_loop(env: Env, ppo: PPO, params, obs_stats, s, z, key, horizon: int, deterministic: bool = True,
+                stop_on_truncation: bool = True, record=None):
+    """Run the policy for ``horizon`` steps from env state ``s`` with physics ``z [P]``.
+
+    The episode's state is frozen after it ends (termination, and truncation unless
+    ``stop_on_truncation=False``), so a fixed-length scan gives the episode's own return.
+    ``record(state, counted, ctrl, key)``, if given, is called after every step on the (frozen)
+    state, with ``counted`` = whether that step was still part of the episode and the ``ctrl``
+    sent; its outputs are stacked ``[T, ...]``.
+
+    Returns ``(final state, return, length, records or None)``.
+    """
+    ctx = ppo.ctx(z)
+
+    def step(c, k):
+        s, carry, alive, ret, length, first = c
+        (mean, log_std, _), carry = ppo.net.apply(params, _norm(obs_stats, s.obs), ctx, carry, first)
+        a = mean if deterministic else mean + jnp.exp(log_std) * jax.random.normal(k, mean.shape)
+        ctrl = to_ctrl(env, a)
+        s2 = env.step(s, ctrl, z)
+        ret = ret + jnp.where(alive, s2.reward, 0.0)
+        length = length + alive
+        done = (s2.terminated | s2.truncated) if stop_on_truncation else s2.terminated
+        s = jax.tree_util.tree_map(lambda new, old: jnp.where(alive, new, old), s2, s)
+        out = None if record is None else record(s, alive, ctrl, k)
+        return (s, carry, alive & ~done, ret, length, jnp.zeros((), bool)), out
+
+    init = (s, jnp.zeros(networks.carry_size(ppo.cfg.net)), jnp.ones((), bool), jnp.zeros(()),
+            jnp.zeros((), jnp.int32), jnp.ones((), bool))
+    (s, _, _, ret, length, _), recs = jax.lax.scan(step, init, jax.random.split(key, horizon))
+    return s, ret, length, recs
+
+
 def episodes(env: Env, ppo: PPO, params, obs_stats, zs, key, num_episodes: int = 1, deterministic: bool = True):
     """Run full episodes for every ``z`` in ``zs [N, P]``.
 
@@ -19,28 +52,11 @@ def episodes(env: Env, ppo: PPO, params, obs_stats, zs, key, num_episodes: int =
     truncation. Pure: usable inside jit (LSDR evaluates its contexts this way).
     """
     n = zs.shape[0]
-    horizon = env.config.episode_length
-    carry_size = networks.carry_size(ppo.cfg.net)
 
     def one(z, k):
         k_reset, k_run = jax.random.split(k)
-        s = env.reset(k_reset, z)
-        ctx = ppo.ctx(z)
-
-        def step(c, kk):
-            s, carry, alive, ret, length, first = c
-            (mean, log_std, _), carry = ppo.net.apply(params, _norm(obs_stats, s.obs), ctx, carry, first)
-            a = mean if deterministic else mean + jnp.exp(log_std) * jax.random.normal(kk, mean.shape)
-            s2 = env.step(s, to_ctrl(env, a), z)
-            ret = ret + jnp.where(alive, s2.reward, 0.0)
-            length = length + alive
-            done = s2.terminated | s2.truncated
-            s = jax.tree_util.tree_map(lambda new, old: jnp.where(alive, new, old), s2, s)
-            return (s, carry, alive & ~done, ret, length, jnp.zeros((), bool)), None
-
-        init = (s, jnp.zeros(carry_size), jnp.ones((), bool), jnp.zeros(()), jnp.zeros((), jnp.int32),
-                jnp.ones((), bool))
-        (s, _, _, ret, length, _), _ = jax.lax.scan(step, init, jax.random.split(k_run, horizon))
+        s, ret, length, _ = closed_loop(env, ppo, params, obs_stats, env.reset(k_reset, z), z, k_run,
+                                        env.config.episode_length, deterministic)
         out = {"return": ret, "length": length}
         out.update({f"final_{m}": v for m, v in s.metrics.items()})
         return out

@@ -32,9 +32,8 @@ from sim2real.algos import reps
 from sim2real.algos.base import DRConfig, DRSpace
 from sim2real.dists import gaussian
 from sim2real.envs.base import Env
-from sim2real.rl import normalize
+from sim2real.evaluate import closed_loop
 from sim2real.rl.ppo import PPO, PPOConfig, PPOState
-from sim2real.rl.rollout import to_ctrl
 from sim2real.sysid import discrepancy
 
 
@@ -194,22 +193,14 @@ class SimOpt:
             s = s.replace(goal=goal)
         data = s.data.replace(qpos=env.effects.unsense(z, qpos0), qvel=qvel0)
         s = s.replace(data=data, obs=env._observe(z, data, s.goal, k_reset))
-        empty = jnp.zeros(0)
 
-        def step(c, k):
-            s, alive, ret = c
-            (mean, _, _), _ = self.ppo.net.apply(params, normalize.apply(obs_stats, s.obs), empty, empty, jnp.zeros((), bool))
-            ctrl = to_ctrl(env, mean)
-            s2 = env.step(s, ctrl, z)
-            ret = ret + jnp.where(alive, s2.reward, 0.0)
-            s = jax.tree_util.tree_map(lambda new, old: jnp.where(alive, new, old), s2, s)
+        def record(s, counted, ctrl, k):
             sig = jnp.concatenate([env.effects.sense(z, s.data.qpos, k), s.data.qvel])
-            out = (sig, alive.astype(jnp.float32), ctrl)
-            # truncation at the episode length is not a reason to stop comparing
-            return (s, alive & ~(s2.terminated), ret), out
+            return sig, counted.astype(jnp.float32), ctrl
 
-        init = (s, jnp.ones((), bool), jnp.zeros(()))
-        (_, _, ret), (sig, alive, ctrl) = jax.lax.scan(step, init, jax.random.split(k_run, self.horizon))
+        # truncation at the episode length is not a reason to stop comparing
+        _, ret, _, (sig, alive, ctrl) = closed_loop(env, self.ppo, params, obs_stats, s, z, k_run, self.horizon,
+                                                    stop_on_truncation=False, record=record)
         return sig, alive, ret, ctrl
 
     def target_rollouts(self, st: SimOptState, z_target, key, n: int) -> RealData:
