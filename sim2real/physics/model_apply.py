@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import copy
 
+import jax
 import jax.numpy as jnp
 import mujoco
 import numpy as np
@@ -183,11 +184,11 @@ APPLIED_FIELDS = (
 
 def to_mjmodel(pm: PhysicsModel, z) -> mujoco.MjModel:
     """A native ``MjModel`` with the fields ``pm.apply(z)`` computes (a copy; ``pm.mj`` is untouched)."""
-    mx = pm.apply(jnp.asarray(z))
+    fields = _applied_fields(pm)(jnp.asarray(z, jnp.float32))
     m = copy.copy(pm.mj)
     for name in APPLIED_FIELDS:
-        getattr(m, name)[:] = np.asarray(getattr(mx, name))
-    m.opt.gravity[:] = np.asarray(mx.opt.gravity)
+        getattr(m, name)[:] = np.asarray(fields[name])
+    m.opt.gravity[:] = np.asarray(fields["gravity"])
     # MuJoCo's C engine reads some derived constants (dof_M0 for "simple" bodies) that MJX
     # recomputes; refresh them so the native model really has the new masses, but keep the
     # constants apply() keeps at their defaults, so both engines see the same model.
@@ -198,6 +199,19 @@ def to_mjmodel(pm: PhysicsModel, z) -> mujoco.MjModel:
         getattr(m, k)[:] = v
     m.stat.meaninertia = meaninertia
     return m
+
+
+def _applied_fields(pm: PhysicsModel):
+    """``jit(z -> the APPLIED_FIELDS and gravity of pm.apply(z))``, built once per ``pm``: the
+    diagnosis builds a native model for every residual it evaluates (hundreds), and run eagerly
+    ``apply`` dispatches (and first compiles) each of its small ops one by one."""
+    f = pm.__dict__.get("_applied_fields_jit")
+    if f is None:
+        def fields(z):
+            mx = pm.apply(z)
+            return {**{name: getattr(mx, name) for name in APPLIED_FIELDS}, "gravity": mx.opt.gravity}
+        f = pm.__dict__["_applied_fields_jit"] = jax.jit(fields)
+    return f
 
 
 _KEPT_CONSTANTS = ("body_invweight0", "dof_invweight0", "tendon_invweight0", "actuator_acc0")

@@ -56,6 +56,10 @@ class InverseDynamics:
         self._qadr = np.array([m.jnt_qposadr[m.actuator_trnid[a, 0]] for a in range(m.nu)])
         self._off_rows = [(i, m.jnt_qposadr[p.index]) for i, p in system.spec.of_kind("sensor_offset")]
         self._actuate = jax.jit(self._actuate_seq, static_argnums=2)
+        # coefficient c(dq) [T, n_fric] of the Coulomb/Stribeck force c * dq, jitted once: run
+        # eagerly it dispatches every small op of the friction model on every residual
+        self._friction_coef = jax.jit(jax.vmap(lambda z, v: system.effects.friction_damping(z, v)[1],
+                                               in_axes=(None, 0)))
 
     # ------------------------------------------------------------------------------------------
     def _actuate_seq(self, z, ctrl_and_q, dt):
@@ -97,7 +101,7 @@ class InverseDynamics:
         fx = self.sys.effects
         out = np.zeros_like(dq)
         if fx.fric_dof.size:
-            c = jax.vmap(lambda v: fx.friction_damping(jnp.asarray(z, jnp.float32), v)[1])(jnp.asarray(dq, jnp.float32))
+            c = self._friction_coef(jnp.asarray(z, jnp.float32), jnp.asarray(dq, jnp.float32))
             out[:, fx.fric_dof] = np.asarray(c) * dq[:, fx.fric_dof]
         return out
 
