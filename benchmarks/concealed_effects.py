@@ -121,9 +121,16 @@ def run_case(case: Case, work: str) -> dict:
             # every candidate: BIC score against none, simulated (verified) prediction error
             "candidates": " ".join(f"{e['effect']}@{e['target']}:{e['score']:.1f}:{e['verified_nrmse'] or float('nan'):.4g}"
                                    for e in d["effects"]),
-            "correct": sel["effect"] == case.effect and (case.effect in ("none", "action_delay")
-                                                         or sel["target"] == case.target),
+            "correct": _matches(case, sel),
+            # the true effect was among those the diagnosis called indistinguishable from its pick
+            "truth_tied": not _matches(case, sel) and any(_matches(case, r) for r in d["indistinguishable"]),
             "seconds": round(time.time() - t0, 1)}
+
+
+def _matches(case: Case, effect_row: dict) -> bool:
+    """The diagnosis' effect row names the hidden effect (at its target; delay has none)."""
+    return effect_row["effect"] == case.effect and (case.effect in ("none", "action_delay")
+                                                    or effect_row["target"] == case.target)
 
 
 def confusion(rows: list[dict]) -> tuple[list[str], list[list[int]]]:
@@ -169,9 +176,11 @@ def main():
     n_ok = sum(r["correct"] for r in rows)
     none_rows = [r for r in rows if r["true_effect"] == "none"]
     false_named = sum(r["named_effect"] != "none" for r in none_rows)
+    n_tied = sum(bool(r.get("truth_tied")) for r in rows)
     labels, mat = confusion(rows)
     lines = [f"Concealed effects: {n_ok}/{len(rows)} named correctly ({100 * n_ok / max(len(rows), 1):.0f}%); "
-             f"effects named in parameter-only cases: {false_named}/{len(none_rows)}.", "",
+             f"effects named in parameter-only cases: {false_named}/{len(none_rows)}; "
+             f"wrong but with the true effect reported as indistinguishable from the named one: {n_tied}.", "",
              "| true \\ named | " + " | ".join(labels) + " |", "|---" * (len(labels) + 1) + "|"]
     lines += [f"| {t} | " + " | ".join(str(v) if v else "." for v in row) + " |" for t, row in zip(labels, mat)]
     with open(os.path.join(args.out, f"confusion{suffix}.md"), "w") as f:

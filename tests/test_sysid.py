@@ -142,6 +142,30 @@ def test_parameter_only_mismatch_names_no_effect(tmp_path):
     assert d["fitted_params"]["mass:pole"] == pytest.approx(1.3, rel=0.05)
 
 
+def test_effects_the_data_cannot_separate_are_reported(tmp_path):
+    # a 1.5-step delay in front of the prismatic drive's stiff PD loop: a ~2 ms motor lag predicts
+    # the same motion to within the sensor noise, so whichever comes first, the other is reported
+    train, held = str(tmp_path / "train.csv"), str(tmp_path / "held.csv")
+    case = Case("prismatic", "action_delay", "", (("action_delay", 1.5),), noise=1e-6, seed=4)
+    record(case, train)
+    record(dataclasses.replace(case, seed=1004), held)
+    d = diagnose(DiagnoseConfig(model=os.path.join(ASSETS, "prismatic.xml"), recordings=(train,), heldout=(held,),
+                                out=str(tmp_path / "d"), plots=False, progress=False,
+                                effects=("none", "action_delay", "motor_lag")))
+    named = {d["effects"][0]["effect"]} | {r["effect"] for r in d["indistinguishable"]}
+    assert named == {"action_delay", "motor_lag"}
+    assert d["confidence"] < 0.6
+    assert any(n.startswith("indistinguishable") for n in d["notes"])
+
+
+def test_ties_are_within_tolerance_of_the_selection():
+    from sim2real.sysid.identify import ties
+    verified = {"none": 0.1004, "action_delay": 0.100, "motor_lag@drive": 0.1005, "backlash@drive": 0.2}
+    assert ties(verified, "action_delay", 0.01) == ["motor_lag@drive"]   # none is not an effect
+    assert ties(verified, "action_delay", 0.001) == []
+    assert ties({"none": 1.0, "backlash@drive": 1.0}, "none", 0.01) == []  # nothing to be confused with
+
+
 # --------------------------------------------------------------------------------------------
 # real hardware: the bundled EMPS data (the demo)
 
@@ -157,6 +181,7 @@ def test_emps_hardware_diagnosis(tmp_path):
     offset = fc * sel["params"]["coulomb_asym:axis"]  # the constant force offset during motion
     assert offset == pytest.approx(emps.REFERENCE["offset"], rel=0.3)
     assert d["fit"]["reduction"] >= 0.3
+    assert d["indistinguishable"] == []
     for f in ("diagnosis.json", "report.md", "fitted.xml", "overlay.png"):
         assert (out / f).exists(), f
     fitted = mujoco.MjModel.from_xml_path(str(out / "fitted.xml"))

@@ -23,7 +23,7 @@ from sim2real.sysid import locate, report
 from sim2real.sysid.candidates import EFFECTS, library
 from sim2real.sysid.derivatives import smooth_derivatives, velocity_state, window_for
 from sim2real.sysid.export import write_fitted_mjcf
-from sim2real.sysid.identify import Identifier, rank, refine_by_simulation
+from sim2real.sysid.identify import Identifier, rank, refine_by_simulation, ties
 from sim2real.sysid.invdyn import InverseDynamics
 from sim2real.sysid.recordings import check_sample_rate, load_all
 from sim2real.sysid.simulate import Simulator
@@ -49,6 +49,8 @@ class DiagnoseConfig:
       min_gain: an effect must lower held-out error by this fraction to be named.
       verify_top: how many of the best-screened effects are verified by simulation.
       refine_evals: simulations spent refining each close contender (0: no refinement).
+      tie_tolerance: effects whose verified error is within this fraction of the selected one's
+        are reported as indistinguishable from it on these recordings (``indistinguishable``).
       plots: draw the figures of the report.
       progress: show progress while fitting candidates.
     """
@@ -67,6 +69,7 @@ class DiagnoseConfig:
     min_gain: float = 0.02
     verify_top: int = 4
     refine_evals: int = 80
+    tie_tolerance: float = 0.01
     plots: bool = True
     progress: bool = True
 
@@ -246,6 +249,10 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                             "verified_nrmse": verified.get(f.candidate.label)})
     sel_row = next(r for r in effect_rows if r["effect"] == selected.candidate.effect
                    and r["target"] == selected.candidate.target)
+    tied = ties(verified, selected.candidate.label, cfg.tie_tolerance)
+    indistinguishable = [{"effect": f.candidate.effect, "target": f.candidate.target, "params": row["params"],
+                          "verified_nrmse": row["verified_nrmse"]}
+                         for f, row in zip(ordered, effect_rows) if f.candidate.label in tied]
     effect_rows.remove(sel_row)
     effect_rows.insert(0, sel_row)
 
@@ -264,6 +271,13 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
     fit["reduction"] = 1 - fit["after"] / max(fit["before"], 1e-300)
 
     notes = []
+    if indistinguishable:
+        others = ", ".join(f"`{r['effect']}`" + (f" at {r['target']}" if r["target"] else "")
+                           + " (" + ", ".join(f"{k} = {v:.4g}" for k, v in r["params"].items()) + ")"
+                           for r in indistinguishable)
+        notes.append(f"indistinguishable on these recordings: {others} predicts the held-back data as well "
+                     f"as the selected effect (verified error within {100 * cfg.tie_tolerance:g}%); "
+                     f"recordings with faster or richer commands would tell them apart")
     for name, v in fitted_params.items():
         if name.startswith("coulomb_asym:"):
             j = name.split(":", 1)[1]
@@ -275,6 +289,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         "recordings": [r.path for r in train], "heldout": [r.path for r in held],
         "sample_period": dt, "smoothing_window_samples": window, "horizon_samples": horizon,
         "mismatch": mismatch, "effects": effect_rows, "selected": sel_row["effect"], "confidence": conf,
+        "indistinguishable": indistinguishable,
         "fit": fit, "fitted_params": fitted_params, "fitted_mjcf": os.path.join(os.path.abspath(os.path.dirname(
             os.path.join(cfg.out, "x"))), "fitted.xml"), "notes": notes,
         "seconds": round(time.time() - t_start, 1),

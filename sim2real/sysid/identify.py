@@ -385,6 +385,22 @@ def rank(fits: list[Fit], min_gain: float = 0.02, min_bic_drop: float = 10.0, ve
     return uniq, selected, conf, w, verified
 
 
+def ties(verified: dict[str, float], selected: str, tol: float) -> list[str]:
+    """Effects the data cannot tell from the selected one: labels (other than ``selected`` and
+    ``none``) whose verified error is within ``tol`` (relative) of the selected effect's.
+
+    A 1.5-step action delay and a 2 ms motor lag in front of a slow servo, for one, predict the
+    same motion to within the sensor noise; which of them comes first is then an accident of
+    rounding, and the diagnosis says so instead of pretending to know.
+    """
+    is_none = lambda lab: lab.split("@")[0] == "none"
+    if selected not in verified or is_none(selected):
+        return []
+    ref = verified[selected]
+    return [lab for lab, err in sorted(verified.items(), key=lambda t: t[1])
+            if lab != selected and not is_none(lab) and err <= (1 + tol) * ref]
+
+
 def refine_by_simulation(fit: Fit, spec, verify, err0: float, max_evals: int = 80) -> tuple[Fit, float]:
     """Nelder-Mead on ``verify`` (simulated prediction error) over the fit's parameters.
 
