@@ -91,3 +91,13 @@ def test_out_of_bounds_terminate_rule():
     assert not bool(c.terminated) and float(c.metrics["diverged"]) == 0.0
     assert bool(d.terminated) and not bool(d.truncated)
     assert float(d.reward) == 0.0 and float(d.metrics["diverged"]) == 1.0
+
+
+def test_spec_prints_every_parameter_with_its_bounds():
+    from sim2real.envs import make
+
+    spec = make("pendulum").spec
+    lines = str(spec).splitlines()
+    assert len(lines) == len(spec) + 1                      # header + one row each
+    for line, p in zip(lines[1:], spec.params):
+        assert line.split()[0] == p.name and f"{p.high:.4g}" in line

@@ -87,6 +87,14 @@ class ParamSpec:
     def __len__(self) -> int:
         return len(self.params)
 
+    def __str__(self) -> str:
+        """A table: name, default, bounds, unit and what each parameter changes."""
+        w = max((len(n) for n in self.names), default=4)
+        rows = [f"{'name':{w}s}  {'default':>10s}  {'low':>10s}  {'high':>10s}  unit    what"]
+        rows += [f"{p.name:{w}s}  {p.default:10.4g}  {p.low:10.4g}  {p.high:10.4g}  {p.unit:6s}  {p.doc}"
+                 for p in self.params]
+        return "\n".join(rows)
+
     def __contains__(self, name: str) -> bool:
         return name in self._index
 
