@@ -58,10 +58,12 @@ def main(argv):
     with open(os.path.join(out["run_dir"], "summary.json"), "w") as f:
         json.dump(summary, f, indent=2)
     print("SUMMARY", json.dumps(summary))
-    _curve(rows, target, summary, cfg, os.path.join(out["run_dir"], "curve.png"))
+    curve(rows, target, summary, f"{cfg.env} PPO on {summary['device']}", os.path.join(out["run_dir"], "curve.png"))
 
 
-def _curve(rows, target, summary, cfg, path):
+def curve(rows, target, summary, title, path, extra=None):
+    """Training return of every seed against wall time (``rows``: the run's metrics.csv), the
+    final deterministic evaluation and the target; ``extra(ax)`` draws more (Brax's curve)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -71,12 +73,14 @@ def _curve(rows, target, summary, cfg, path):
     for seed in sorted({r["seed"] for r in rows}):
         mine = [r for r in rows if r["seed"] == seed and float(r["episodes"]) > 0]
         ax.plot([float(r["wall_seconds"]) for r in mine], [float(r["episode_return"]) for r in mine],
-                label=f"seed {seed}, training episodes")
-    ax.axhline(summary["eval_return_mean"], color="C0", ls=":", label="final, deterministic eval (seed 0)")
+                label=f"sim2real PPO, seed {seed}, training episodes")
+    if extra is not None:
+        extra(ax)
+    ax.axhline(summary["eval_return_mean"], color="C0", ls=":", label="sim2real final, deterministic eval (seed 0)")
     ax.axhline(target, color="gray", lw=0.8, label=f"target {target:g}")
     ax.set_xlabel("wall time incl. compilation [s]")
     ax.set_ylabel("episode return")
-    ax.set_title(f"{cfg.env} PPO on {summary['device']}")
+    ax.set_title(title)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()

@@ -10,6 +10,7 @@ checkpoint is evaluated, or ``policy.msgpack`` where the folder has no ``checkpo
 ``adapt=true`` (ES-MAML runs) first adapts the policy to each grid cell with the run's
 adaptation operator (its inner PPO updates on that cell's physics), then evaluates (few-shot
 evaluation, seed 004 Fig. 1); the un-adapted returns go to ``returns_before.csv``.
+``progress=false`` hides the progress bar.
 """
 import os
 import sys
@@ -25,10 +26,11 @@ def main(argv):
     from sim2real import config as config_lib
     from sim2real.evaluate import episodes, grid, parse_axis
     from sim2real.plots import heatmap
+    from sim2real.progress import Bar
     from sim2real.train import load_policy, load_run
 
     _, args = config_lib.parse_args(argv)
-    known = {"run", "x", "y", "episodes", "out", "seed", "adapt"}
+    known = {"run", "x", "y", "episodes", "out", "seed", "adapt", "progress"}
     for k in args:
         if k not in known:
             raise config_lib.ConfigError(f"unknown argument '{k}'; arguments: {', '.join(sorted(known))}")
@@ -58,11 +60,15 @@ def main(argv):
 
     adapted = jax.jit(jax.vmap(cell_adapted, in_axes=(None, None, 0, None)))
     rets, before = [], []
-    for s in range(cfg.num_seeds):
-        params, stats = jax.tree_util.tree_map(lambda x: x[s], (all_params, all_stats))
-        before.append(np.asarray(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"]).mean(1))
-        if adapt:
-            rets.append(np.asarray(adapted(params, stats, jnp.asarray(zs), key)))
+    label = f"{len(zs)} physics x {n_ep} episodes" + (", adapted first" if adapt else "")
+    with Bar(bool(args.get("progress", True)), cfg.num_seeds * (1 + adapt), label) as bar:
+        for s in range(cfg.num_seeds):
+            params, stats = jax.tree_util.tree_map(lambda x: x[s], (all_params, all_stats))
+            before.append(np.asarray(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"]).mean(1))
+            bar.step(text=f"seed {s}: evaluated")
+            if adapt:
+                rets.append(np.asarray(adapted(params, stats, jnp.asarray(zs), key)))
+                bar.step(text=f"seed {s}: adapted and evaluated")
     ret = np.mean(rets if adapt else before, 0).reshape(shape)
     out = str(args.get("out", os.path.join(str(args["run"]), "eval")))
     os.makedirs(out, exist_ok=True)

@@ -28,6 +28,7 @@ from sim2real import checkpoint
 from sim2real.algos.base import DRConfig
 from sim2real.algos.simopt import SimOpt, SimOptConfig, real_from_recordings
 from sim2real.envs import make
+from sim2real.progress import Bar
 from sim2real.rl.ppo import PPOConfig
 
 
@@ -125,7 +126,7 @@ def run(cfg: SimOptRunConfig) -> dict:
         total = start + 1
     rows = []
     names = so.space.names
-    bar = _bar(cfg.progress, total, start)
+    bar = Bar(cfg.progress, total, "SimOpt", done=start)
     end = total if not cfg.max_iterations else min(total, start + cfg.max_iterations)
     try:
         for i in range(start, end):
@@ -148,12 +149,10 @@ def run(cfg: SimOptRunConfig) -> dict:
                      final_cov=np.asarray(state.cov), names=np.array(names))
             os.replace(dist_path + ".tmp.npz", dist_path)
             checkpoint.save(mngr, i + 1, state)
-            if bar:
-                bar.update(1, description=f"iter {i}: target return {np.nanmean(m['eval_return']):.1f}")
+            bar.step(text=f"iter {i}: target return {np.nanmean(m['eval_return']):.1f}")
     finally:
         mngr.wait_until_finished()
-        if bar:
-            bar.close()
+        bar.close()
     export_policy(so, state, os.path.join(rd.dir, "policy.msgpack"))
     return {"state": state, "rows": rows, "run_dir": rd.dir, "simopt": so, "env": env}
 
@@ -175,22 +174,3 @@ def _write_rows(path, rows, append):
             w.writeheader()
             w.writerows(old + rows)
     os.replace(tmp, path)
-
-
-class _Bar:
-    def __init__(self, total, done):
-        from rich.progress import Progress
-
-        self.p = Progress()
-        self.p.start()
-        self.t = self.p.add_task("SimOpt", total=total, completed=done)
-
-    def update(self, n, description):
-        self.p.update(self.t, advance=n, description=description)
-
-    def close(self):
-        self.p.stop()
-
-
-def _bar(enabled, total, done):
-    return _Bar(total, done) if enabled else None

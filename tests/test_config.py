@@ -66,3 +66,17 @@ def test_every_bundled_training_config_builds_its_algorithm():
             cfg = config_lib.load(TrainConfig, [f"config={p}", "algo_options.warm_start=''"])
         algo = build_algo(cfg, make(cfg.env, **cfg.env_options))
         assert algo is not None, p
+
+
+def test_progress_bar_closes_and_can_be_disabled():
+    from sim2real.progress import Bar
+
+    with Bar(True, 2, "work") as bar:
+        bar.step()
+        bar.step(text="done")
+        assert bar.p.tasks[0].completed == 2
+    assert not bar.enabled          # closed on exit
+    off = Bar(False, 3, "quiet")
+    off.step(2, "nothing drawn")
+    off.close()
+    assert not hasattr(off, "p")

@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from sim2real.progress import Bar
 from sim2real.sysid import locate, report
 from sim2real.sysid.candidates import EFFECTS, library
 from sim2real.sysid.derivatives import smooth_derivatives, velocity_state, window_for
@@ -128,25 +129,6 @@ def score(system: System, sim: Simulator, z, recs, horizon: int, window: int, fi
     return nr, preds
 
 
-class _Progress:
-    def __init__(self, enabled: bool, total: int, label: str):
-        self.enabled = enabled
-        if enabled:
-            from rich.progress import Progress
-
-            self.p = Progress()
-            self.p.start()
-            self.t = self.p.add_task(label, total=total)
-
-    def step(self, text: str = ""):
-        if self.enabled:
-            self.p.update(self.t, advance=1, description=text)
-
-    def close(self):
-        if self.enabled:
-            self.p.stop()
-
-
 def diagnose(cfg: DiagnoseConfig) -> dict:
     """Run the whole diagnosis; returns the content of ``diagnosis.json``."""
     if not cfg.model:
@@ -220,11 +202,11 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
     force_scale = np.array([np.percentile(np.abs(act_force[:, m.jnt_dofadr[m.actuator_trnid[a, 0]]]), 99)
                             / max(abs(float(m.actuator_gear[a, 0])), 1e-12) for a in range(m.nu)])
     cands = library(system, dt, q_range, force_scale, tuple(cfg.effects))
-    bar = _Progress(cfg.progress, len(cands), "fitting candidates")
+    bar = Bar(cfg.progress, len(cands), "fitting candidates")
     fits = []
     for c in cands:
         fits.append(ident.fit(c))
-        bar.step(f"fitted {c.label}")
+        bar.step(text=f"fitted {c.label}")
     bar.close()
     # verify the front-runners by simulation on the held-back tail of the training recordings
     tail_start = [int(len(r) * (1 - cfg.val_fraction)) for r in train]
