@@ -11,6 +11,7 @@ can compensate it; SimOpt identifies it from closed-loop rollouts.
     python benchmarks/simopt_ablation.py             # both targets, SimOpt + baselines, plots (CPU, ~40 min)
     python benchmarks/simopt_ablation.py --plots     # figures from the saved CSV/NPZ
     python benchmarks/simopt_ablation.py --scale 0.05 --out /tmp/x   # a quick check of the script
+    python benchmarks/simopt_ablation.py --task hopper  # hopper: torso mass and friction (GPU)
 
 Writes benchmarks/results/simopt_ablation/: ``<target>_iterations.csv`` (mean/std/returns per
 iteration and seed), ``<target>_distribution.npz``, ``baselines.csv``, ``summary.json`` and the
@@ -31,15 +32,21 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-OUT = os.path.join(HERE, "results", "simopt_ablation")
-CONFIG = os.path.join(HERE, "..", "configs", "simopt_pendulum.yaml")
-PARAMS = ["sensor_offset:hinge", "mass:pole"]
-TARGETS = {  # like the paper's drawer 15 cm and 22 cm away: two offsets, both far outside N(mu0, Sigma0)
-    "offset_0.3_mass_1.5": {"sensor_offset:hinge": 0.3, "mass:pole": 1.5},
-    "offset_0.5_mass_1.3": {"sensor_offset:hinge": 0.5, "mass:pole": 1.3},
-}
-WIDE = ([-0.6, 0.5], [0.6, 2.0])  # the wide uniform DR box (covers both targets)
 EVAL_EPISODES = 64
+# per task: the SimOpt config, the adapted parameters, the targets (like the paper's drawer 15 cm
+# and 22 cm away: far outside N(mu0, Sigma0)), the wide uniform DR box covering them, results folder
+TASKS = {
+    "pendulum": dict(
+        config="simopt_pendulum.yaml", env="pendulum", params=["sensor_offset:hinge", "mass:pole"],
+        targets={"offset_0.3_mass_1.5": {"sensor_offset:hinge": 0.3, "mass:pole": 1.5},
+                 "offset_0.5_mass_1.3": {"sensor_offset:hinge": 0.5, "mass:pole": 1.3}},
+        wide=([-0.6, 0.5], [0.6, 2.0]), out="simopt_ablation"),
+    # a torso 2.5x as heavy on a slippery floor (GPU scale: 4096 envs x 16 steps per PPO update)
+    "hopper": dict(
+        config="simopt_hopper.yaml", env="hopper", params=["mass:torso", "friction"],
+        targets={"mass_9_friction_0.6": {"mass:torso": 9.0, "friction": 0.6}},
+        wide=([1.0, 0.3], [12.0, 3.0]), out="simopt_hopper"),
+}
 
 
 def simopt_config(name, target, args):
@@ -48,7 +55,7 @@ def simopt_config(name, target, args):
 
     tgt = "{" + ", ".join(f"'{k}': {v}" for k, v in target.items()) + "}"
     cfg = config_lib.load(SimOptRunConfig, [
-        f"config={CONFIG}", f"name=simopt_{name}", f"out_dir={args.work}", "overwrite=true", "progress=false",
+        f"config={os.path.join(HERE, '..', 'configs', args.t['config'])}", f"name=simopt_{name}", f"out_dir={args.work}", "overwrite=true", "progress=false",
         f"num_seeds={args.seeds}", f"target={tgt}",
         f"simopt.init_ppo_updates={max(2, int(300 * args.scale))}",
         f"simopt.ppo_updates={max(2, int(args.ppo_updates * args.scale))}",
@@ -77,7 +84,7 @@ def train_baseline(label, dr_args, args, so_cfg):
     updates = (s.init_ppo_updates or s.ppo_updates) + s.iterations * s.ppo_updates
     p = so_cfg.ppo
     cfg = config_lib.load(TrainConfig, [
-        "env=pendulum", f"name=baseline_{label}", f"out_dir={args.work}", "overwrite=true", "progress=false",
+        f"env={args.t['env']}", f"name=baseline_{label}", f"out_dir={args.work}", "overwrite=true", "progress=false",
         "tensorboard=false", f"num_seeds={args.seeds}", f"total_steps={updates * p.batch_size}",
         f"updates_per_chunk={max(1, updates // 4)}", f"ppo.num_envs={p.num_envs}", f"ppo.num_steps={p.num_steps}",
         f"ppo.num_epochs={p.num_epochs}", f"ppo.num_minibatches={p.num_minibatches}", f"ppo.gamma={p.gamma}",
@@ -105,32 +112,37 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=2)
     ap.add_argument("--scale", type=float, default=1.0)
-    ap.add_argument("--out", default=OUT)
+    ap.add_argument("--task", default="pendulum", choices=sorted(TASKS))
+    ap.add_argument("--out", default="", help="default: benchmarks/results/<the task's folder>")
     ap.add_argument("--work", default="/tmp/simopt_ablation_runs")
     ap.add_argument("--plots", action="store_true")
     ap.add_argument("--ppo-updates", type=int, default=100, help="PPO updates per SimOpt iteration")
-    ap.add_argument("--targets", default=",".join(TARGETS))
+    ap.add_argument("--targets", default="", help="comma-separated target names (default: all of the task's)")
     ap.add_argument("--skip-simopt", dest="skip_simopt", action="store_true",
                     help="train baselines only; the targets' SimOpt CSVs must already be in --out")
     ap.add_argument("--baselines", default="nominal,wide_udr,oracle", help="which baselines to (re)train")
     args = ap.parse_args()
+    args.t = TASKS[args.task]
+    args.out = args.out or os.path.join(HERE, "results", args.t["out"])
+    targets, params, wide_box = args.t["targets"], args.t["params"], args.t["wide"]
     os.makedirs(args.out, exist_ok=True)
     if args.plots:
-        return plots(args.out)
+        return plots(args.out, args.t)
     import jax
 
-    rows, summary = [], {"device": str(jax.devices()[0].device_kind), "seeds": args.seeds, "scale": args.scale}
-    names = [n for n in args.targets.split(",") if n]
+    rows, summary = [], {"device": str(jax.devices()[0].device_kind), "seeds": args.seeds, "scale": args.scale,
+                         "task": args.task}
+    names = [n for n in args.targets.split(",") if n] or list(targets)
     so_cfg = None
     for name in names:
         if args.skip_simopt:  # baselines only (another device call): the SimOpt CSVs are in --out
-            so_cfg = simopt_config(name, TARGETS[name], args)
+            so_cfg = simopt_config(name, targets[name], args)
         else:
-            so_cfg = run_simopt(name, TARGETS[name], args)
+            so_cfg = run_simopt(name, targets[name], args)
     # baselines: trained once, evaluated on every target
-    wide = [f"dr.params={PARAMS}", f"dr.low={WIDE[0]}", f"dr.high={WIDE[1]}"]
+    wide = [f"dr.params={params}", f"dr.low={wide_box[0]}", f"dr.high={wide_box[1]}"]
     baselines = {"nominal": [], "wide_udr": wide}
-    baselines.update({f"oracle_{n}": ["dr.fixed={" + ", ".join(f"'{k}': {v}" for k, v in TARGETS[n].items()) + "}"]
+    baselines.update({f"oracle_{n}": ["dr.fixed={" + ", ".join(f"'{k}': {v}" for k, v in targets[n].items()) + "}"]
                       for n in names})
     wanted = set(args.baselines.split(","))
     method = lambda label: "oracle" if label.startswith("oracle_") else label  # noqa: E731
@@ -144,7 +156,7 @@ def main():
         for name in names:
             if label.startswith("oracle_") and label != f"oracle_{name}":
                 continue
-            r = evaluate_on(out, TARGETS[name], args.seeds)
+            r = evaluate_on(out, targets[name], args.seeds)
             rows.append({"target": name, "method": method(label),
                          **{f"seed{s}": float(v) for s, v in enumerate(r)}, "mean": float(r.mean())})
             print(rows[-1], flush=True)
@@ -157,16 +169,16 @@ def main():
         last = int(max(r["iteration"] for r in it))
         fin = [r for r in it if r["iteration"] == last]
         summary[name] = {
-            "truth": TARGETS[name],
-            "final_mean": {p: float(np.mean([r[f"mean:{p}"] for r in fin])) for p in PARAMS},
-            "final_std": {p: float(np.mean([r[f"std:{p}"] for r in fin])) for p in PARAMS},
+            "truth": targets[name],
+            "final_mean": {p: float(np.mean([r[f"mean:{p}"] for r in fin])) for p in params},
+            "final_std": {p: float(np.mean([r[f"std:{p}"] for r in fin])) for p in params},
             "eval_return_per_iteration": [float(np.mean([r["eval_return"] for r in it if r["iteration"] == i]))
                                           for i in range(last + 1)],
             "baselines": {r["method"]: r["mean"] for r in rows if r["target"] == name},
         }
     with open(os.path.join(args.out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=2)
-    plots(args.out)
+    plots(args.out, args.t)
 
 
 def _read(path):
@@ -174,20 +186,21 @@ def _read(path):
         return [{k: (float(v) if k not in ("target", "method") else v) for k, v in r.items()} for r in csv.DictReader(f)]
 
 
-def plots(out):
+def plots(out, task):
+    targets, params = task["targets"], task["params"]
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    names = [n for n in TARGETS if os.path.exists(os.path.join(out, f"{n}_iterations.csv"))]
+    names = [n for n in targets if os.path.exists(os.path.join(out, f"{n}_iterations.csv"))]
     base = _read(os.path.join(out, "baselines.csv")) if os.path.exists(os.path.join(out, "baselines.csv")) else []
     # Fig. 6 / 9 (left): mean and std per iteration against the truth
-    fig, axes = plt.subplots(len(names), len(PARAMS), figsize=(5 * len(PARAMS), 3.2 * len(names)), squeeze=False)
+    fig, axes = plt.subplots(len(names), len(params), figsize=(5 * len(params), 3.2 * len(names)), squeeze=False)
     for i, n in enumerate(names):
         it = _read(os.path.join(out, f"{n}_iterations.csv"))
         seeds = sorted({int(r["seed"]) for r in it})
-        for j, p in enumerate(PARAMS):
+        for j, p in enumerate(params):
             ax = axes[i, j]
             for s in seeds:
                 rs = [r for r in it if int(r["seed"]) == s]
@@ -196,7 +209,7 @@ def plots(out):
                 sd = np.array([r[f"std:{p}"] for r in rs])
                 ax.plot(x, mu, marker="o", label=f"seed {s}")
                 ax.fill_between(x, mu - sd, mu + sd, alpha=0.2)
-            ax.axhline(TARGETS[n][p], color="k", ls="--", label="truth")
+            ax.axhline(targets[n][p], color="k", ls="--", label="truth")
             ax.set_title(f"{n}: {p}")
             ax.set_xlabel("SimOpt iteration (distribution the policy trained on)")
             ax.legend(fontsize=7)
@@ -214,12 +227,12 @@ def plots(out):
             corr = c / np.outer(sd, sd)
             ax = axes[i, j]
             im = ax.imshow(corr, vmin=-1, vmax=1, cmap="RdBu_r")
-            for a in range(len(PARAMS)):
-                for b in range(len(PARAMS)):
+            for a in range(len(params)):
+                for b in range(len(params)):
                     ax.text(b, a, f"{c[a, b]:.2g}", ha="center", va="center", fontsize=8)
-            short = [q.split(":")[0] for q in PARAMS]
-            ax.set_xticks(range(len(PARAMS)), short, fontsize=7)
-            ax.set_yticks(range(len(PARAMS)), short if j == 0 else [], fontsize=7)
+            short = [q.split(":")[0] for q in params]
+            ax.set_xticks(range(len(params)), short, fontsize=7)
+            ax.set_yticks(range(len(params)), short if j == 0 else [], fontsize=7)
             ax.set_title(f"{n}\n{'final' if k == len(covs) - 1 else f'iteration {k}'} (colour: correlation)", fontsize=8)
         fig.colorbar(im, ax=axes[i].tolist(), shrink=0.8)
     fig.savefig(os.path.join(out, "covariance.png"), dpi=110)
