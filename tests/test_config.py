@@ -68,6 +68,20 @@ def test_every_bundled_training_config_builds_its_algorithm():
         assert algo is not None, p
 
 
+def test_every_bundled_simopt_config_builds():
+    import glob
+
+    from sim2real.simopt_run import SimOptRunConfig, build
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    paths = sorted(glob.glob(os.path.join(root, "configs", "simopt_*.yaml")))
+    assert len(paths) >= 2
+    for p in paths:
+        cfg = config_lib.load(SimOptRunConfig, [f"config={p}"])
+        so = build(cfg)[1]
+        assert len(so.space) == len(cfg.dr.params), p
+
+
 def test_progress_bar_closes_and_can_be_disabled():
     from sim2real.progress import Bar
 
