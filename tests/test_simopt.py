@@ -102,6 +102,15 @@ def simopt():
     return so, st, zt, real
 
 
+def test_target_rollouts_take_their_own_horizon(simopt):
+    # the reported return uses whole episodes even when the discrepancy compares fewer steps
+    so, st, zt, real = simopt
+    assert real.signals.shape[1] == so.horizon
+    longer = jax.jit(lambda s: so.target_rollouts(s, zt, jax.random.PRNGKey(3), 2, horizon=so.horizon + 7))(st)
+    assert longer.signals.shape[1] == so.horizon + 7
+    np.testing.assert_allclose(np.asarray(longer.signals[:, :so.horizon]), np.asarray(real.signals), atol=1e-6)
+
+
 def test_discrepancy_is_zero_at_the_truth(simopt):
     so, st, zt, real = simopt
     xi = jnp.array([[0.4, 1.5], [0.0, 1.0], [0.4, 1.0], [0.0, 1.5]])

@@ -56,8 +56,8 @@ class SimOptConfig:
       smooth_std, smooth_truncate: Gaussian smoothing (paper: 5 timesteps, 4).
       ppo_updates: PPO updates per iteration (warm-started).
       init_ppo_updates: PPO updates before the first real rollouts (0: ``ppo_updates``).
-      eval_episodes: extra target episodes per iteration for the reported return (not used by
-        SimOpt itself; 0 disables).
+      eval_episodes: extra target episodes per iteration for the reported return: whole episodes
+        (the env's episode length, whatever ``horizon`` is), not used by SimOpt itself; 0 disables.
     """
 
     init_mean: tuple[float, ...] = ()
@@ -178,11 +178,12 @@ class SimOpt:
         return st.replace(ppo=ppo_st), {"train_return": ret}
 
     # ---------------------------------------------------------------------- rollouts ----
-    def rollout(self, params, obs_stats, z, key, qpos0, qvel0, goal):
+    def rollout(self, params, obs_stats, z, key, qpos0, qvel0, goal, horizon: int | None = None):
         """Deterministic closed-loop rollout from a measured state.
 
         Args:
           z: ``[P]`` physics; qpos0 ``[nq]`` (measured), qvel0 ``[nv]``; goal ``[G]`` or ``None``.
+          horizon: steps (default: the compared horizon, ``cfg.horizon`` or the episode length).
         Returns:
           ``(signals [T, S], alive [T], return, ctrl [T, nu])``; after a termination the state is frozen.
         """
@@ -199,12 +200,13 @@ class SimOpt:
             return sig, counted.astype(jnp.float32), ctrl
 
         # truncation at the episode length is not a reason to stop comparing
-        _, ret, _, (sig, alive, ctrl) = closed_loop(env, self.ppo, params, obs_stats, s, z, k_run, self.horizon,
-                                                    stop_on_truncation=False, record=record)
+        _, ret, _, (sig, alive, ctrl) = closed_loop(env, self.ppo, params, obs_stats, s, z, k_run,
+                                                    horizon or self.horizon, stop_on_truncation=False, record=record)
         return sig, alive, ret, ctrl
 
-    def target_rollouts(self, st: SimOptState, z_target, key, n: int) -> RealData:
-        """``n`` rollouts of the current policy on a target env with hidden physics ``z_target [P]``."""
+    def target_rollouts(self, st: SimOptState, z_target, key, n: int, horizon: int | None = None) -> RealData:
+        """``n`` rollouts of the current policy on a target env with hidden physics ``z_target [P]``
+        (``horizon`` steps; default: the compared horizon)."""
         env = self.env
 
         def one(k):
@@ -212,7 +214,7 @@ class SimOpt:
             s = env.reset(k_init, z_target)
             qpos0 = env.effects.sense(z_target, s.data.qpos, k_init)
             sig, alive, ret, ctrl = self.rollout(st.ppo.params, st.ppo.obs_stats, z_target, k_run, qpos0,
-                                                 s.data.qvel, s.goal)
+                                                 s.data.qvel, s.goal, horizon)
             return RealData(sig, alive, qpos0, s.data.qvel, s.goal, ret, ctrl)
 
         return jax.vmap(one)(jax.random.split(key, n))
@@ -258,8 +260,8 @@ class SimOpt:
         ``first`` selects (``init_ppo_updates`` for the first iteration, else ``ppo_updates``).
 
         ``metrics``: ``mean [D]``, ``cov [D, D]`` (the distribution the policy was trained on),
-        ``target_return`` (mean over the real rollouts), ``eval_return`` (``eval_episodes`` extra
-        target episodes, NaN when 0), REPS ``eta``/``kl``/``ess``/costs per update.
+        ``target_return`` (mean over the real rollouts, ``horizon`` steps), ``eval_return``
+        (``eval_episodes`` extra whole target episodes, NaN when 0), REPS ``eta``/``kl``/``ess``/costs per update.
         """
         cfg = self.cfg
         n = self.updates_for(first) if num_updates is None else num_updates
@@ -269,7 +271,9 @@ class SimOpt:
         st = st.replace(key=key)
         real = self.target_rollouts(st, z_target, k_real, cfg.real_rollouts)
         if cfg.eval_episodes:
-            ev = self.target_rollouts(st, z_target, k_eval, cfg.eval_episodes).ret.mean()
+            # whole episodes, whatever horizon the discrepancy compares (the task's return)
+            ev = self.target_rollouts(st, z_target, k_eval, cfg.eval_episodes,
+                                      self.env.config.episode_length).ret.mean()
         else:
             ev = jnp.full((), jnp.nan)
         st, info = self.adapt(st, real)
