@@ -339,6 +339,13 @@ def _without_warm_start(cfg: TrainConfig) -> TrainConfig:
     return dataclasses.replace(cfg, algo_options={k: v for k, v in cfg.algo_options.items() if k != "warm_start"})
 
 
+def _rebuild(run_dir: str):
+    """``(cfg, env, algo)`` of a saved run, from its ``config.yaml`` (without its warm start)."""
+    cfg = config_lib.load(TrainConfig, [f"config={os.path.join(run_dir, 'config.yaml')}"])
+    env = make(cfg.env, **cfg.env_options)
+    return cfg, env, build_algo(_without_warm_start(cfg), env)
+
+
 def load_policy(run_dir: str):
     """``(cfg, env, algo, params, obs_stats)`` from a run folder's ``policy.msgpack`` (leading seed axis)."""
     from flax import serialization
@@ -346,9 +353,7 @@ def load_policy(run_dir: str):
     path = os.path.join(run_dir, "policy.msgpack")
     if not os.path.exists(path):
         raise FileNotFoundError(f"no policy.msgpack in '{run_dir}' (was the run finished?)")
-    cfg = config_lib.load(TrainConfig, [f"config={os.path.join(run_dir, 'config.yaml')}"])
-    env = make(cfg.env, **cfg.env_options)
-    algo = build_algo(_without_warm_start(cfg), env)
+    cfg, env, algo = _rebuild(run_dir)
     template = jax.eval_shape(jax.vmap(algo.init), jax.random.split(jax.random.PRNGKey(0), cfg.num_seeds))
     params, stats = jax.eval_shape(algo.policy, template)
     zeros = jax.tree_util.tree_map(lambda x: np.zeros(x.shape, x.dtype), {"params": params, "obs_stats": stats})
@@ -359,9 +364,7 @@ def load_policy(run_dir: str):
 
 def load_run(run_dir: str, step: int | None = None):
     """Config, env, algorithm and restored state of a run folder (for evaluation)."""
-    cfg = config_lib.load(TrainConfig, [f"config={os.path.join(run_dir, 'config.yaml')}"])
-    env = make(cfg.env, **cfg.env_options)
-    algo = build_algo(_without_warm_start(cfg), env)
+    cfg, env, algo = _rebuild(run_dir)
     template = jax.jit(jax.vmap(algo.init))(jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds))
     ckpt = os.path.join(run_dir, "checkpoints")
     if not os.path.isdir(ckpt):
