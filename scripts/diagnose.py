@@ -20,11 +20,10 @@ def main(argv):
 
     cfg = config_lib.load(DiagnoseConfig, argv)
     demo = not cfg.model and not cfg.recordings
-    if demo:
-        recs = emps.recordings(os.path.join(os.path.dirname(os.path.abspath(cfg.out)), "emps_recordings"))
+    if demo:  # the bundled .mat files are read directly (recordings.py knows their layout)
         cfg = config_lib.load(DiagnoseConfig, argv + [f"model={emps.NOMINAL_XML}",
-                                                      f"recordings=[{recs['estimation']}]",
-                                                      f"heldout=[{recs['validation']}]"])
+                                                      f"recordings=[{emps.RECORDINGS['estimation']}]",
+                                                      f"heldout=[{emps.RECORDINGS['validation']}]"])
     d = diagnose(cfg)
     sel = d["effects"][0]
     print(f"selected: {sel['effect']}" + (f" at {sel['target']}" if sel["target"] else "")

@@ -1,19 +1,87 @@
-"""Shared command-line plumbing: clean one-line errors and non-zero exit codes."""
+"""Shared command-line plumbing: clean one-line errors, non-zero exit codes, clean stops.
+
+Exit status: 0 done, 2 bad input (the message names the file, column, row or key), 130 stopped by
+Ctrl-C or SIGTERM (after the tool cleaned up: temporary folders removed, a training run's
+checkpoint kept).
+"""
 from __future__ import annotations
 
+import contextlib
+import signal
 import sys
+import threading
+
+INTERRUPTED = 130
+
+
+class Stopped(Exception):
+    """A long job stopped at a safe point on request (SIGINT/SIGTERM); the message says what was kept."""
+
+
+class StopRequest:
+    """Set by SIGINT/SIGTERM while a long job runs (see :func:`stop_on_signal`)."""
+
+    def __init__(self):
+        self.requested = False
+        self.signal_name = ""
+
+
+@contextlib.contextmanager
+def stop_on_signal():
+    """Turn the first SIGINT/SIGTERM into a flag the job checks at its next safe point; a second
+    one stops at once (KeyboardInterrupt). Off the main thread (no handlers there) the flag
+    never rises and signals keep their default behaviour.
+
+    Why a flag: a KeyboardInterrupt raised wherever Python happens to be (inside orbax's
+    asynchronous checkpoint writer, a JAX callback, an event loop) can be swallowed there, and the
+    run then goes on to the end and exits 0.
+    """
+    req = StopRequest()
+    if threading.current_thread() is not threading.main_thread():
+        yield req
+        return
+
+    def handler(signum, frame):
+        if req.requested:
+            raise KeyboardInterrupt
+        req.requested = True
+        req.signal_name = signal.Signals(signum).name
+        print(f"\n{req.signal_name}: stopping at the next safe point (again to stop at once)", file=sys.stderr)
+
+    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield req
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+def _terminate_as_interrupt(signum, frame):
+    raise KeyboardInterrupt
 
 
 def main_guard(fn, argv):
-    """Run ``fn(argv)``; user errors print ``error: ...`` to stderr and exit with status 2."""
+    """Run ``fn(argv)``; user errors print ``error: ...`` to stderr and exit with status 2; Ctrl-C
+    and SIGTERM exit with status 130 after the job's own clean-up ran."""
     from sim2real.config import ConfigError
 
     if any(a in ("-h", "--help", "help") for a in argv):
         print(sys.modules["__main__"].__doc__ or "")
         return 0
+    # SIGTERM (a scheduler's stop) unwinds like Ctrl-C, so every ``finally`` runs
+    previous = signal.signal(signal.SIGTERM, _terminate_as_interrupt)
     try:
         fn(argv)
-    except (ConfigError, KeyError, ValueError, FileNotFoundError, FileExistsError, TypeError) as e:
+    except (ConfigError, KeyError, ValueError, FileNotFoundError, FileExistsError, TypeError,
+            NotADirectoryError, IsADirectoryError, PermissionError) as e:
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
         print(f"error: {msg}", file=sys.stderr)
         sys.exit(2)
+    except Stopped as e:
+        print(f"stopped: {e}", file=sys.stderr)
+        sys.exit(INTERRUPTED)
+    except KeyboardInterrupt:
+        print("interrupted; nothing half-written was left behind", file=sys.stderr)
+        sys.exit(INTERRUPTED)
+    finally:
+        signal.signal(signal.SIGTERM, previous)

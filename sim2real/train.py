@@ -10,7 +10,6 @@ import csv
 import dataclasses
 import json
 import os
-import shutil
 import time
 import warnings
 from typing import Any
@@ -19,7 +18,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real import checkpoint, parallel
+from sim2real import checkpoint, output, parallel
 from sim2real import config as config_lib
 from sim2real.algos.base import DRConfig
 from sim2real.envs import make
@@ -134,17 +133,18 @@ class Run:
         self.metrics_path = os.path.join(self.dir, "metrics.csv")
 
     def prepare(self) -> None:
+        """Create the run folder (or check the one resumed); a folder sim2real did not make is never
+        replaced (``sim2real.output``)."""
         cfg = self.cfg
-        exists = os.path.exists(self.dir)
-        if exists and not cfg.resume:
-            if cfg.overwrite:
-                shutil.rmtree(self.dir)
-            elif os.listdir(self.dir):
+        if cfg.resume:
+            output.check(self.dir, "run", keep_existing=True, key="name")
+            if not os.path.exists(self.ckpt_dir):
+                raise FileNotFoundError(f"resume=true but '{self.ckpt_dir}' holds no checkpoint")
+        else:
+            if os.path.isdir(self.dir) and os.listdir(self.dir) and not cfg.overwrite:
                 raise FileExistsError(f"run folder '{self.dir}' exists; pass resume=true to continue it, "
                                       "overwrite=true to replace it, or another name=")
-        if cfg.resume and not os.path.exists(self.ckpt_dir):
-            raise FileNotFoundError(f"resume=true but '{self.ckpt_dir}' holds no checkpoint")
-        os.makedirs(self.dir, exist_ok=True)
+            output.create(self.dir, "run", overwrite=cfg.overwrite, key="name")
         config_lib.save(cfg, os.path.join(self.dir, "config.yaml"))
 
 

@@ -13,12 +13,11 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import shutil
-import tempfile
 import time
 
 import numpy as np
 
+from sim2real import output
 from sim2real.progress import Bar
 from sim2real.sysid import locate, report
 from sim2real.sysid.candidates import EFFECTS, library
@@ -135,20 +134,9 @@ def diagnose(cfg: DiagnoseConfig) -> dict:
         raise ValueError("model=PATH.xml is required")
     if not cfg.recordings:
         raise ValueError("recordings=[a.csv,...] is required")
-    if os.path.exists(cfg.out) and os.listdir(cfg.out) and not cfg.overwrite:
-        raise FileExistsError(f"output folder '{cfg.out}' exists; pass overwrite=true or another out=")
-    parent = os.path.dirname(os.path.abspath(cfg.out))
-    os.makedirs(parent, exist_ok=True)
-    tmp = tempfile.mkdtemp(prefix=".diagnosis-", dir=parent)
-    try:
-        result = _run(cfg, tmp)
-        if os.path.exists(cfg.out):
-            shutil.rmtree(cfg.out)
-        os.replace(tmp, cfg.out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return result
+    inputs = [cfg.model, *cfg.recordings, *cfg.heldout]
+    with output.staged(cfg.out, "diagnosis", inputs, cfg.overwrite) as tmp:
+        return _run(cfg, tmp)
 
 
 def _run(cfg: DiagnoseConfig, out: str) -> dict:
@@ -249,10 +237,15 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
            "after": float(np.mean(list(nr_a.values()))),
            "per_signal": {k: {"before": nr_b[k], "after": nr_a[k]} for k in nr_b}}
     fitted_params = {k: float(v) for k, v in selected.params.items()}
-    write_fitted_mjcf(cfg.model, system, z_fit, fitted_params, os.path.join(out, "fitted.xml"))
     fit["reduction"] = 1 - fit["after"] / max(fit["before"], 1e-300)
 
     notes = []
+    try:  # the last step: whatever happens here, the diagnosis itself is kept
+        write_fitted_mjcf(cfg.model, system, z_fit, fitted_params, os.path.join(out, "fitted.xml"))
+        fitted_mjcf = os.path.join(os.path.abspath(cfg.out), "fitted.xml")
+    except Exception as e:  # noqa: BLE001
+        fitted_mjcf = None
+        notes.append(f"fitted.xml was not written: {type(e).__name__}: {e}")
     if indistinguishable:
         others = ", ".join(f"`{r['effect']}`" + (f" at {r['target']}" if r["target"] else "")
                            + " (" + ", ".join(f"{k} = {v:.4g}" for k, v in r["params"].items()) + ")"
@@ -272,8 +265,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         "sample_period": dt, "smoothing_window_samples": window, "horizon_samples": horizon,
         "mismatch": mismatch, "effects": effect_rows, "selected": sel_row["effect"], "confidence": conf,
         "indistinguishable": indistinguishable,
-        "fit": fit, "fitted_params": fitted_params, "fitted_mjcf": os.path.join(os.path.abspath(os.path.dirname(
-            os.path.join(cfg.out, "x"))), "fitted.xml"), "notes": notes,
+        "fit": fit, "fitted_params": fitted_params, "fitted_mjcf": fitted_mjcf, "notes": notes,
         "seconds": round(time.time() - t_start, 1),
     }
     images = {}

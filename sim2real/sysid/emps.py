@@ -15,12 +15,17 @@ FILES = {"estimation": "DATA_EMPS.mat", "validation": "DATA_EMPS_PULSES.mat"}
 REFERENCE = {"M": 95.1089, "Fv": 203.5034, "Fc": 20.3935, "offset": -3.1648}
 
 
-def convert(mat_path: str, csv_path: str) -> str:
-    """EMPS ``.mat`` -> recording CSV; returns ``csv_path``."""
-    d = loadmat(mat_path)
-    for k in ("t", "qm", "qg", "vir", "gtau"):
-        if k not in d:
-            raise RecordingError(f"{mat_path}: variable '{k}' missing; not an EMPS file")
+RECORDINGS = {k: os.path.join(DATA, f) for k, f in FILES.items()}
+_VARS = ("t", "qm", "qg", "vir", "gtau")
+
+
+def is_emps(raw: dict) -> bool:
+    """A ``loadmat`` dict in the EMPS benchmark's own layout (read directly as a recording)."""
+    return all(k in raw for k in _VARS)
+
+
+def columns(d: dict) -> dict[str, np.ndarray]:
+    """EMPS variables -> recording columns for ``emps_nominal.xml`` (joint ``axis``, actuator ``drive``)."""
     gtau = float(np.ravel(d["gtau"])[0])
     vir = d["vir"].ravel().astype(float)
     pulses = d["pulses_N"].ravel().astype(float) if "pulses_N" in d else np.zeros_like(vir)
@@ -28,10 +33,21 @@ def convert(mat_path: str, csv_path: str) -> str:
     # starts or ends (before the position can react): the pulses are injected into the drive's
     # voltage, i.e. a known force gtau * pulses on the load on top of the PD loop's output.
     # So the loop's own force is gtau * (vir - pulses) and the pulses are a known external force.
-    cols = {"qpos:axis": d["qm"].ravel(), "ctrl:drive": d["qg"].ravel(), "force:drive": gtau * (vir - pulses)}
+    cols = {"time": d["t"].ravel().astype(float), "qpos:axis": d["qm"].ravel().astype(float),
+            "ctrl:drive": d["qg"].ravel().astype(float), "force:drive": gtau * (vir - pulses)}
     if "pulses_N" in d:
         cols["qfrc:axis"] = gtau * pulses
-    save_csv(csv_path, d["t"].ravel(), cols)
+    return cols
+
+
+def convert(mat_path: str, csv_path: str) -> str:
+    """EMPS ``.mat`` -> recording CSV (for other tools); returns ``csv_path``."""
+    d = loadmat(mat_path)
+    missing = [k for k in _VARS if k not in d]
+    if missing:
+        raise RecordingError(f"{mat_path}: variable(s) {', '.join(missing)} missing; not an EMPS file")
+    cols = columns(d)
+    save_csv(csv_path, cols.pop("time"), cols)
     return csv_path
 
 

@@ -21,10 +21,15 @@ def write_fitted_mjcf(xml_path: str, system, z: np.ndarray, fitted: dict[str, fl
     for p in sp.params:
         v = zd[p.name]
         if p.kind == "body_mass" and v != p.default:
+            # the compiled nominal's mass properties (MJCF often gives mass through geoms, with no
+            # <inertial>), scaled, written as an explicit inertial
             b = spec.body(system.bodies[p.index])
             scale = v / p.default
+            m = system.mj
             b.mass = v
-            b.inertia = [x * scale for x in b.inertia]
+            b.ipos = [float(x) for x in m.body_ipos[p.index]]
+            b.iquat = [float(x) for x in m.body_iquat[p.index]]
+            b.inertia = [float(x) * scale for x in m.body_inertia[p.index]]
             b.explicitinertial = True
         elif p.kind == "dof_damping":
             j = spec.joint(system.joints[p.index])

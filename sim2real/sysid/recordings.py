@@ -69,44 +69,79 @@ class Recording:
                          {k: v[start:stop] for k, v in self.columns.items()})
 
 
+def _read_csv(path: str) -> dict[str, np.ndarray]:
+    """CSV with a header row; every cell must be a number (the error names row and column)."""
+    import csv
+
+    # utf-8-sig: spreadsheet programs start the file with a byte-order mark
+    with open(path, newline="", encoding="utf-8-sig") as f:
+        rows = csv.reader(f)
+        header = next(rows, None)
+        if not header or not any(h.strip() for h in header):
+            raise RecordingError(f"{path}: empty file (expected a header row)")
+        names = [h.strip() for h in header]
+        if len(set(names)) != len(names):
+            dup = sorted({n for n in names if names.count(n) > 1})
+            raise RecordingError(f"{path}: duplicated column(s) {dup}")
+        data = []
+        for r, row in enumerate(rows, start=1):
+            if not row or all(not c.strip() for c in row):
+                continue  # blank line (a trailing newline)
+            if len(row) != len(names):
+                raise RecordingError(f"{path}: malformed CSV: data row {r} has {len(row)} values, "
+                                     f"the header {len(names)} columns")
+            vals = []
+            for c, cell in enumerate(row):
+                cell = cell.strip()
+                if not cell:
+                    raise RecordingError(f"{path}: empty cell in column '{names[c]}' at data row {r}")
+                try:
+                    vals.append(float(cell))
+                except ValueError:
+                    raise RecordingError(f"{path}: '{cell[:20]}' in column '{names[c]}' at data row {r} "
+                                         "is not a number") from None
+            data.append(vals)
+    if not data:
+        raise RecordingError(f"{path}: no data rows (only a header)")
+    arr = np.asarray(data, np.float64)
+    return {n: arr[:, i] for i, n in enumerate(names)}
+
+
+def _read_npz(path: str) -> dict[str, np.ndarray]:
+    with np.load(path) as f:
+        return {k: np.asarray(f[k], np.float64).ravel() for k in f.files}
+
+
+def _read_mat(path: str) -> dict[str, np.ndarray]:
+    """MATLAB: variables named like the columns (``:`` as ``__``), or the EMPS benchmark's layout."""
+    from scipy.io import loadmat
+
+    raw = loadmat(path)
+    from sim2real.sysid import emps
+
+    if emps.is_emps(raw):
+        return emps.columns(raw)
+    return {k.replace("__", ":"): np.asarray(v, np.float64).ravel() for k, v in raw.items() if not k.startswith("__")}
+
+
+# one reader per format; a new format is one function here (and its test)
+READERS = {".csv": _read_csv, ".npz": _read_npz, ".mat": _read_mat}
+
+
 def _read_table(path: str) -> dict[str, np.ndarray]:
     ext = os.path.splitext(path)[1].lower()
     if not os.path.exists(path):
         raise RecordingError(f"{path}: file not found")
+    if os.path.isdir(path):
+        raise RecordingError(f"{path}: is a folder, not a recording file")
+    if ext not in READERS:
+        raise RecordingError(f"{path}: unsupported file type '{ext}' (use {', '.join(READERS)})")
     try:
-        if ext == ".csv":
-            with open(path) as f:
-                header = f.readline().strip()
-            if not header:
-                raise RecordingError(f"{path}: empty file (expected a header row)")
-            names = [h.strip() for h in header.split(",")]
-            if len(set(names)) != len(names):
-                dup = sorted({n for n in names if names.count(n) > 1})
-                raise RecordingError(f"{path}: duplicated column(s) {dup}")
-            try:
-                data = np.genfromtxt(path, delimiter=",", skip_header=1, dtype=np.float64, invalid_raise=True,
-                                     ndmin=2)
-            except ValueError as e:
-                raise RecordingError(f"{path}: malformed CSV ({e})") from None
-            if data.size == 0:
-                raise RecordingError(f"{path}: no data rows")
-            if data.shape[1] != len(names):
-                raise RecordingError(f"{path}: {data.shape[1]} values per row but {len(names)} header columns")
-            return {n: data[:, i] for i, n in enumerate(names)}
-        if ext == ".npz":
-            with np.load(path) as f:
-                return {k: np.asarray(f[k], np.float64).ravel() for k in f.files}
-        if ext == ".mat":
-            from scipy.io import loadmat
-
-            raw = loadmat(path)
-            return {k.replace("__", ":"): np.asarray(v, np.float64).ravel()
-                    for k, v in raw.items() if not k.startswith("__")}
+        return READERS[ext](path)
     except RecordingError:
         raise
-    except Exception as e:  # unreadable file of a known type
-        raise RecordingError(f"{path}: cannot read ({type(e).__name__}: {e})") from None
-    raise RecordingError(f"{path}: unsupported file type '{ext}' (use .csv, .npz or .mat)")
+    except Exception as e:  # unreadable file of a known type (garbage bytes, wrong encoding)
+        raise RecordingError(f"{path}: cannot read as {ext[1:].upper()} ({type(e).__name__}: {e})") from None
 
 
 def load(path: str, model: mujoco.MjModel) -> Recording:
