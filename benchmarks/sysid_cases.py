@@ -1,0 +1,808 @@
+"""Independent cases for the diagnosis: native MuJoCo truth, effects written here, fresh MJCF.
+
+Nothing in this file imports ``sim2real``: the "true" plants are written as new MJCF (not the
+envs' assets), stepped with MuJoCo's own ``mj_step``, and every hidden effect is implemented here
+on its own terms -- MuJoCo's ``frictionloss`` for Coulomb friction, native damping, springs and
+force limits, a payload as an extra welded body, a delay line and a first-order lag run at the
+truth's physics rate, backlash as a separate motor-side rotor coupled to the link through a dead
+band, sensor offsets and noise added to what is logged. The diagnosis only ever sees the nominal
+MJCF (written as people write it: masses from geoms or ``<inertial>``, any integrator, no helper
+sites) and the CSV recordings.
+
+    cases = build_cases()                 # the frozen list (seeds, designs, truths), ~160 cases
+    paths = generate(cases[0], folder)    # nominal.xml, train_0.csv, train_1.csv, heldout.csv, truth.json
+
+``split``: a case with an even seed belongs to the tuning half, an odd seed to the test half.
+Cases come in pairs of neighbouring seeds (same system and effect, other magnitude and design),
+so both halves cover the same conditions.
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import os
+
+import mujoco
+import numpy as np
+
+INTEGRATORS = ("Euler", "implicit", "implicitfast", "RK4")
+RATES = (100.0, 200.0, 500.0, 1000.0)
+EXCITATIONS = ("multisine", "chirp", "prbs", "steps", "pd")
+
+
+# ------------------------------------------------------------------------------------------------
+# systems: links (bodies with one joint each) and actuators, as plain data
+@dataclasses.dataclass
+class Link:
+    name: str
+    parent: str                 # "world" or another link's name
+    pos: tuple                  # body position in the parent frame
+    joint: str                  # joint name
+    jtype: str                  # "hinge" | "slide"
+    axis: tuple
+    geom: dict                  # {"type": "capsule", "fromto": (...), "size": r} or box/cylinder with "pos"
+    mass: float
+    damping: float = 0.0        # declared joint damping (the nominal model's)
+    stiffness: float = 0.0      # declared spring
+    tip: tuple | None = None    # where a payload goes (link frame); None: no payload candidate
+
+
+@dataclasses.dataclass
+class Actuator:
+    name: str
+    joint: str
+    kind: str                   # motor | position | velocity | intvelocity | general
+    gear: float = 1.0
+    kp: float = 0.0
+    kv: float = 0.0
+    gain: float = 0.0           # general: force = gain * act/ctrl + bias1 * q + bias2 * qdot
+    bias: tuple = (0.0, 0.0)
+    dyn_tau: float = 0.0        # general with dyntype=filter (a lag the user *knows* about)
+    ctrlrange: tuple = (-1.0, 1.0)
+
+
+@dataclasses.dataclass
+class System:
+    name: str
+    links: list
+    actuators: list
+    gravity: tuple = (0.0, 0.0, -9.81)
+    # open-loop references for servos are in these units (ctrl range is the limit)
+    pd: tuple | None = None     # (kp, kd) per actuated joint for the generator's own PD loop
+    unobservable: tuple = ()    # effect kinds the data cannot show on this system (never hidden here)
+    max_range: float | None = None  # open-loop motion allowed per joint (default: 4 rad, 0.5 m); None: any
+
+
+def _cap(length, r=0.02, axis="z"):
+    to = {"z": (0, 0, -length), "x": (length, 0, 0)}[axis]
+    return {"type": "capsule", "fromto": (0, 0, 0) + to, "size": r}
+
+
+def systems() -> dict[str, System]:
+    """The plants. Lengths in m, masses in kg, gains in SI units."""
+    S = {}
+    S["pendulum_geared"] = System(
+        "pendulum_geared",
+        [Link("link", "world", (0, 0, 0), "hinge", "hinge", (0, 1, 0), _cap(0.3), 0.4, damping=0.01,
+              tip=(0, 0, -0.3))],
+        [Actuator("motor", "hinge", "motor", gear=20.0, ctrlrange=(-0.1, 0.1))],
+        pd=((4.0, 0.25),))
+    S["rc_servo_pendulum"] = System(
+        "rc_servo_pendulum",
+        [Link("arm", "world", (0, 0, 0), "servo_joint", "hinge", (0, 1, 0), _cap(0.15, 0.01), 0.08,
+              tip=(0, 0, -0.15))],
+        [Actuator("servo", "servo_joint", "position", kp=2.0, kv=0.04, ctrlrange=(-1.5, 1.5))])
+    S["arm2"] = System(
+        "arm2",
+        [Link("upper", "world", (0, 0, 0), "shoulder", "hinge", (0, 1, 0), _cap(0.3), 0.6, damping=0.02,
+              tip=(0, 0, -0.3)),
+         Link("lower", "upper", (0, 0, -0.3), "elbow", "hinge", (0, 1, 0), _cap(0.25), 0.3, damping=0.01,
+              tip=(0, 0, -0.25))],
+        [Actuator("m_shoulder", "shoulder", "motor", gear=1.0, ctrlrange=(-4, 4)),
+         Actuator("m_elbow", "elbow", "motor", gear=1.0, ctrlrange=(-2, 2))],
+        pd=((25.0, 1.2), (8.0, 0.35)))
+    S["arm3"] = System(
+        "arm3",
+        [Link("l1", "world", (0, 0, 0), "j1", "hinge", (0, 1, 0), _cap(0.25), 0.5, damping=0.02, tip=(0, 0, -0.25)),
+         Link("l2", "l1", (0, 0, -0.25), "j2", "hinge", (0, 1, 0), _cap(0.2), 0.3, damping=0.01, tip=(0, 0, -0.2)),
+         Link("l3", "l2", (0, 0, -0.2), "j3", "hinge", (0, 1, 0), _cap(0.15), 0.15, damping=0.005,
+              tip=(0, 0, -0.15))],
+        [Actuator("a1", "j1", "motor", ctrlrange=(-5, 5)), Actuator("a2", "j2", "motor", ctrlrange=(-3, 3)),
+         Actuator("a3", "j3", "motor", ctrlrange=(-1.5, 1.5))],
+        pd=((30.0, 1.5), (12.0, 0.5), (4.0, 0.12)))
+    S["pendubot"] = System(
+        "pendubot",
+        [Link("first", "world", (0, 0, 0), "j_act", "hinge", (0, 1, 0), _cap(0.2), 0.3, damping=0.01, tip=(0, 0, -0.2)),
+         Link("second", "first", (0, 0, -0.2), "j_free", "hinge", (0, 1, 0), _cap(0.2), 0.2,
+              tip=(0, 0, -0.2))],
+        [Actuator("motor", "j_act", "motor", gear=1.0, ctrlrange=(-1.5, 1.5))])
+    S["scara"] = System(  # horizontal arm: gravity along the joint axes, no gravity torque
+        "scara",
+        [Link("inner", "world", (0, 0, 0), "base", "hinge", (0, 0, 1), _cap(0.3, axis="x"), 0.8, damping=0.03,
+              tip=(0.3, 0, 0)),
+         Link("outer", "inner", (0.3, 0, 0), "elbow", "hinge", (0, 0, 1), _cap(0.25, axis="x"), 0.4,
+              tip=(0.25, 0, 0))],
+        [Actuator("m_base", "base", "motor", ctrlrange=(-2, 2)), Actuator("m_elbow", "elbow", "motor", ctrlrange=(-1, 1))],
+        unobservable=("sensor_offset",))
+    S["cartpole"] = System(
+        "cartpole",
+        [Link("cart", "world", (0, 0, 0), "slider", "slide", (1, 0, 0),
+              {"type": "box", "size": (0.1, 0.05, 0.03), "pos": (0, 0, 0)}, 1.0, damping=0.1),
+         Link("pole", "cart", (0, 0, 0), "hinge", "hinge", (0, 1, 0), _cap(0.5, 0.015), 0.15, damping=0.002,
+              tip=(0, 0, -0.5))],
+        [Actuator("push", "slider", "motor", gear=10.0, ctrlrange=(-1, 1))],
+        unobservable=("sensor_offset@slider", "payload@cart"))
+    S["gantry_crane"] = System(  # trolley on a position servo, load hanging on a rope
+        "gantry_crane",
+        [Link("trolley", "world", (0, 0, 0), "travel", "slide", (1, 0, 0),
+              {"type": "box", "size": (0.08, 0.05, 0.03), "pos": (0, 0, 0)}, 2.0, damping=0.5),
+         Link("load", "trolley", (0, 0, 0), "swing", "hinge", (0, 1, 0), _cap(0.6, 0.01), 0.5, damping=0.005,
+              tip=(0, 0, -0.6))],
+        [Actuator("servo", "travel", "position", kp=400.0, kv=60.0, ctrlrange=(-0.5, 0.5))],
+        unobservable=("payload@trolley",))
+    S["linear_axis"] = System(  # EMPS-like drive under a stiff position servo
+        "linear_axis",
+        [Link("carriage", "world", (0, 0, 0), "axis", "slide", (1, 0, 0),
+              {"type": "box", "size": (0.06, 0.06, 0.04), "pos": (0, 0, 0)}, 5.0, damping=20.0)],
+        [Actuator("drive", "axis", "position", kp=4.0e4, kv=600.0, ctrlrange=(-0.1, 0.3))],
+        unobservable=("payload",))
+    S["ball_screw"] = System(  # motor torque through a 2 mm lead screw (gear = 2*pi/lead)
+        "ball_screw",
+        [Link("nut", "world", (0, 0, 0), "screw", "slide", (1, 0, 0),
+              {"type": "box", "size": (0.05, 0.05, 0.05), "pos": (0, 0, 0)}, 8.0, damping=80.0)],
+        [Actuator("motor", "screw", "motor", gear=2 * math.pi / 0.002, ctrlrange=(-0.1, 0.1))],
+        unobservable=("sensor_offset", "payload", "joint_stiffness"), pd=((1500.0, 100.0),))
+    S["belt_stage"] = System(  # voltage-driven DC motor: force = k*V - k_emf*v (back EMF)
+        "belt_stage",
+        [Link("slide", "world", (0, 0, 0), "belt", "slide", (1, 0, 0),
+              {"type": "box", "size": (0.05, 0.04, 0.02), "pos": (0, 0, 0)}, 1.5, damping=2.0)],
+        [Actuator("voltage", "belt", "general", gain=4.0, bias=(0.0, -6.0), ctrlrange=(-12, 12))],
+        unobservable=("sensor_offset", "payload"), pd=((400.0, 40.0),))
+    S["flywheel"] = System(  # disk on a vertical axis under a velocity servo
+        "flywheel",
+        [Link("wheel", "world", (0, 0, 0), "spin", "hinge", (0, 0, 1),
+              {"type": "cylinder", "size": (0.1, 0.01), "pos": (0, 0, 0)}, 1.2, damping=0.002)],
+        [Actuator("vservo", "spin", "velocity", kv=0.05, ctrlrange=(-30, 30))],
+        unobservable=("sensor_offset", "payload", "joint_stiffness"), max_range=1e9)
+    S["voice_coil"] = System(  # mass on a spring driven by a voice coil
+        "voice_coil",
+        [Link("mover", "world", (0, 0, 0), "coil", "slide", (1, 0, 0),
+              {"type": "box", "size": (0.02, 0.02, 0.02), "pos": (0, 0, 0)}, 0.2, damping=0.8, stiffness=300.0)],
+        [Actuator("coil", "coil", "motor", gear=5.0, ctrlrange=(-2, 2))],
+        unobservable=("payload", "joint_stiffness"))
+    S["intvel_pendulum"] = System(  # hinge driven by an integrated-velocity servo (a hobby servo's mode)
+        "intvel_pendulum",
+        [Link("bar", "world", (0, 0, 0), "pivot", "hinge", (0, 1, 0), _cap(0.2, 0.015), 0.25,
+              tip=(0, 0, -0.2))],
+        [Actuator("iservo", "pivot", "intvelocity", kp=6.0, kv=0.1, ctrlrange=(-3, 3))])
+    S["filtered_drive"] = System(  # a general actuator whose lag the user already models (dyntype filter)
+        "filtered_drive",
+        [Link("rotor", "world", (0, 0, 0), "shaft", "hinge", (0, 1, 0), _cap(0.25), 0.5, damping=0.02,
+              tip=(0, 0, -0.25))],
+        [Actuator("amp", "shaft", "general", gain=3.0, dyn_tau=0.02, ctrlrange=(-1, 1))],
+        pd=((3.0, 0.2),))
+    return S
+
+
+# ------------------------------------------------------------------------------------------------
+# MJCF writing
+def _f(v) -> str:
+    return " ".join(f"{float(x):.9g}" for x in (v if isinstance(v, (tuple, list, np.ndarray)) else [v]))
+
+
+def _geom_xml(g: dict, mass: float | None, name: str) -> str:
+    attrs = [f'name="{name}"', f'type="{g["type"]}"', f'size="{_f(g["size"])}"']
+    if "fromto" in g:
+        attrs.append(f'fromto="{_f(g["fromto"])}"')
+    if "pos" in g:
+        attrs.append(f'pos="{_f(g["pos"])}"')
+    if mass is not None:
+        attrs.append(f'mass="{mass:.9g}"')
+    return "<geom " + " ".join(attrs) + "/>"
+
+
+@dataclasses.dataclass
+class Mods:
+    """What makes the truth differ from the nominal model (all native MuJoCo where possible)."""
+
+    mass_scale: dict = dataclasses.field(default_factory=dict)      # link -> factor
+    damping_scale: dict = dataclasses.field(default_factory=dict)   # joint -> factor (declared damping)
+    extra_damping: dict = dataclasses.field(default_factory=dict)   # joint -> N s/m | Nm s/rad
+    stiffness: dict = dataclasses.field(default_factory=dict)       # joint -> N/m | Nm/rad
+    frictionloss: dict = dataclasses.field(default_factory=dict)    # joint -> N | Nm
+    payload: dict = dataclasses.field(default_factory=dict)         # link -> (kg, position in link frame)
+    forcerange: dict = dataclasses.field(default_factory=dict)      # actuator -> limit (actuator force units)
+    rotor: dict = dataclasses.field(default_factory=dict)           # joint -> rotor inertia (backlash)
+
+
+def _link_inertial(system: System, link: Link) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(pos, quat, diaginertia) of the link's geom-derived inertia, computed by MuJoCo itself."""
+    xml = (f'<mujoco><worldbody><body name="b">{_geom_xml(link.geom, link.mass, "g")}'
+           f'<joint type="hinge"/></body></worldbody></mujoco>')
+    m = mujoco.MjModel.from_xml_string(xml)
+    return m.body_ipos[1].copy(), m.body_iquat[1].copy(), m.body_inertia[1].copy()
+
+
+def write_mjcf(system: System, integrator: str, timestep: float, mass_mode: str, mods: Mods | None = None,
+               model_name: str = "") -> str:
+    """MJCF text of the system (nominal when ``mods`` is None)."""
+    mods = mods or Mods()
+    children: dict[str, list[Link]] = {}
+    for lk in system.links:
+        children.setdefault(lk.parent, []).append(lk)
+
+    def body(lk: Link, indent: str) -> list[str]:
+        scale = mods.mass_scale.get(lk.name, 1.0)
+        out = [f'{indent}<body name="{lk.name}" pos="{_f(lk.pos)}">']
+        jd = lk.damping * mods.damping_scale.get(lk.joint, 1.0) + mods.extra_damping.get(lk.joint, 0.0)
+        jattr = [f'name="{lk.joint}"', f'type="{lk.jtype}"', f'axis="{_f(lk.axis)}"']
+        if jd > 0:
+            jattr.append(f'damping="{jd:.9g}"')
+        k = lk.stiffness + mods.stiffness.get(lk.joint, 0.0)
+        if k > 0:
+            jattr.append(f'stiffness="{k:.9g}"')
+        if lk.joint in mods.frictionloss:
+            jattr.append(f'frictionloss="{mods.frictionloss[lk.joint]:.9g}"')
+        out.append(f'{indent}  <joint {" ".join(jattr)}/>')
+        if mass_mode == "inertial":
+            pos, quat, inertia = _link_inertial(system, lk)
+            out.append(f'{indent}  <inertial pos="{_f(pos)}" quat="{_f(quat)}" mass="{lk.mass * scale:.9g}" '
+                       f'diaginertia="{_f(inertia * scale)}"/>')
+            out.append(f'{indent}  {_geom_xml(lk.geom, None, lk.name + "_geom")}')
+        else:
+            out.append(f'{indent}  {_geom_xml(lk.geom, lk.mass * scale, lk.name + "_geom")}')
+        if lk.name in mods.payload:
+            mp, where = mods.payload[lk.name]
+            out.append(f'{indent}  <body name="{lk.name}_payload" pos="{_f(where)}">'
+                       f'<inertial pos="0 0 0" mass="{mp:.9g}" diaginertia="{_f([1e-5 * mp] * 3)}"/></body>')
+        for ch in children.get(lk.name, []):
+            out += rotor(ch, indent + "  ")
+            out += body(ch, indent + "  ")
+        out.append(f"{indent}</body>")
+        return out
+
+    def rotor(lk: Link, indent: str) -> list[str]:
+        """The motor side of a joint with backlash: coaxial body, driven by the actuator."""
+        if lk.joint not in mods.rotor:
+            return []
+        return [f'{indent}<body name="{lk.joint}_rotor" pos="{_f(lk.pos)}">',
+                f'{indent}  <joint name="{lk.joint}_rotor" type="{lk.jtype}" axis="{_f(lk.axis)}" '
+                f'armature="{mods.rotor[lk.joint]:.9g}"/>',
+                f'{indent}  <inertial pos="0 0 0" mass="1e-4" diaginertia="1e-9 1e-9 1e-9"/>',
+                f"{indent}</body>"]
+
+    lines = [f'<mujoco model="{model_name or system.name}">',
+             f'  <option timestep="{timestep:.9g}" integrator="{integrator}" gravity="{_f(system.gravity)}"/>',
+             '  <default><geom contype="0" conaffinity="0"/></default>', "  <worldbody>"]
+    for lk in children.get("world", []):
+        lines += rotor(lk, "    ")
+        lines += body(lk, "    ")
+    lines += ["  </worldbody>", "  <actuator>"]
+    for a in system.actuators:
+        joint = a.joint + "_rotor" if a.joint in mods.rotor else a.joint
+        attr = [f'name="{a.name}"', f'joint="{joint}"', 'ctrllimited="true"', f'ctrlrange="{_f(a.ctrlrange)}"']
+        if a.name in mods.forcerange:
+            lim = mods.forcerange[a.name]
+            attr += ['forcelimited="true"', f'forcerange="{-lim:.9g} {lim:.9g}"']
+        if a.kind == "motor":
+            lines.append(f'    <motor {" ".join(attr)} gear="{a.gear:.9g}"/>')
+        elif a.kind == "position":
+            lines.append(f'    <position {" ".join(attr)} kp="{a.kp:.9g}" kv="{a.kv:.9g}"/>')
+        elif a.kind == "velocity":
+            lines.append(f'    <velocity {" ".join(attr)} kv="{a.kv:.9g}"/>')
+        elif a.kind == "intvelocity":
+            lo, hi = a.ctrlrange
+            lines.append(f'    <intvelocity {" ".join(attr)} kp="{a.kp:.9g}" kv="{a.kv:.9g}" actrange="-10 10"/>')
+        elif a.kind == "general":
+            dyn = f' dyntype="filter" dynprm="{a.dyn_tau:.9g}"' if a.dyn_tau > 0 else ""
+            lines.append(f'    <general {" ".join(attr)}{dyn} gainprm="{a.gain:.9g}" biastype="affine" '
+                         f'biasprm="0 {a.bias[0]:.9g} {a.bias[1]:.9g}"/>')
+    lines += ["  </actuator>", "</mujoco>"]
+    return "\n".join(lines) + "\n"
+
+
+# ------------------------------------------------------------------------------------------------
+# designs, truths, cases
+@dataclasses.dataclass(frozen=True)
+class Design:
+    integrator: str
+    timestep: float          # the nominal model's (s)
+    mass_mode: str           # geom | inertial
+    rate: float              # logging rate (Hz)
+    seconds: float           # per recording
+    excitation: str
+    noise: float             # position noise std (rad; slides: m)
+    quant: float             # encoder resolution (0: none)
+    qvel: bool               # velocity column logged (noise 10x the position noise per second)
+
+
+@dataclasses.dataclass(frozen=True)
+class Case:
+    seed: int
+    system: str
+    kind: str                # single | none | double
+    effects: tuple           # ((effect, target, magnitude), ...): magnitude is a relative level 0, 1, 2
+    nominal: tuple = ()      # param-only: (("mass", link, factor) | ("damping", joint, factor), ...)
+    design: Design | None = None
+
+    @property
+    def split(self) -> str:
+        return "tuning" if self.seed % 2 == 0 else "test"
+
+    @property
+    def label(self) -> str:
+        what = "+".join(f"{e}@{t}" if t else e for e, t, _ in self.effects) or "none"
+        return f"{self.seed:03d}_{self.system}_{what}"
+
+
+def applicable(system: System) -> list[tuple[str, str]]:
+    """(effect, target) pairs the data of this system can show."""
+    out = []
+    act_joints = {a.joint for a in system.actuators}
+    for lk in system.links:
+        out.append(("coulomb_friction", lk.joint))
+        if lk.damping == 0:
+            out.append(("viscous_damping", lk.joint))
+        if lk.stiffness == 0:
+            out.append(("joint_stiffness", lk.joint))
+        out.append(("sensor_offset", lk.joint))
+        if lk.tip is not None:
+            out.append(("mass_offset", lk.name))
+    out.append(("action_delay", ""))
+    for a in system.actuators:
+        out += [("motor_lag", a.name), ("actuator_saturation", a.name)]
+        if a.joint in act_joints:
+            out.append(("backlash", a.name))
+    hidden = set(system.unobservable)
+
+    def seen(e, t):
+        names = {e, f"{e}@{t}"} | ({"payload", f"payload@{t}"} if e == "mass_offset" else set())
+        return not names & hidden
+
+    return [(e, t) for e, t in out if seen(e, t)]
+
+
+def _design(system: System, rng: np.random.Generator, seconds: float | None = None) -> Design:
+    integ = str(rng.choice(INTEGRATORS))
+    ts = float(rng.choice([0.0005, 0.001, 0.002]))
+    rate = float(rng.choice(RATES))
+    exc = list(EXCITATIONS) if system.pd is not None else [e for e in EXCITATIONS if e != "pd"]
+    slide = system.links[0].jtype == "slide"
+    noise = float(rng.choice([1e-4, 3e-4, 1e-3, 3e-3]))
+    quant = 0.0
+    if rng.uniform() < 0.3:  # an encoder: quantised, little other noise
+        quant = float(2 * math.pi / rng.choice([1024, 4096, 16384]))
+        noise = 0.0
+    if slide:  # linear scales: 0.01-0.3 mm noise, 1-10 um encoder steps
+        noise, quant = noise * 0.1, (float(rng.choice([1e-6, 5e-6, 1e-5])) if quant else 0.0)
+    return Design(integ, ts, str(rng.choice(["geom", "inertial"])), rate,
+                  float(seconds if seconds is not None else rng.choice([3.0, 5.0, 8.0, 8.0, 12.0, 20.0])),
+                  str(rng.choice(exc)), noise, quant, bool(rng.uniform() < 0.5))
+
+
+def build_cases() -> list[Case]:
+    """The frozen case list. Deterministic: the same list on every machine."""
+    S = systems()
+    rng = np.random.default_rng(20261123)
+    cases: list[Case] = []
+
+    def add_pair(system, kind, effects_pair, nominal_pair=((), ())):
+        for k in range(2):
+            seed = len(cases)
+            r = np.random.default_rng(1000 + seed)
+            cases.append(Case(seed, system, kind, effects_pair[k], nominal_pair[k], _design(S[system], r)))
+
+    # single effects: every applicable (effect, target) of a rotating subset of systems, in pairs
+    singles = []
+    for name, sysm in S.items():
+        for e, t in applicable(sysm):
+            singles.append((name, e, t))
+    rng.shuffle(singles)
+    # keep every effect kind well represented: up to 10 cases (5 pairs) per kind
+    per_kind: dict[str, int] = {}
+    chosen = []
+    for name, e, t in singles:
+        if per_kind.get(e, 0) >= 5:
+            continue
+        per_kind[e] = per_kind.get(e, 0) + 1
+        chosen.append((name, e, t))
+    for name, e, t in chosen:
+        m = rng.permutation(3)[:2]
+        add_pair(name, "single", (((e, t, int(m[0])),), ((e, t, int(m[1])),)))
+    # parameter-only: masses and declared damping off, nothing missing (right answer: none)
+    names = list(S)
+    for i in range(16):
+        name = names[i % len(names)]
+        sysm = S[name]
+        pair = []
+        for k in range(2):
+            r = np.random.default_rng(5000 + 2 * i + k)
+            mods = []
+            for lk in sysm.links:
+                if r.uniform() < 0.7:
+                    mods.append(("mass", lk.name, float(r.choice([0.7, 0.8, 1.25, 1.4]))))
+                if lk.damping > 0 and r.uniform() < 0.5:
+                    mods.append(("damping", lk.joint, float(r.choice([0.3, 0.5, 2.0, 3.0]))))
+            if not mods:
+                mods.append(("mass", sysm.links[0].name, 1.3))
+            pair.append(tuple(mods))
+        add_pair(name, "none", ((), ()), tuple(pair))
+    # two effects at once
+    doubles = []
+    for name, sysm in S.items():
+        app = applicable(sysm)
+        kinds = {}
+        for e, t in app:
+            kinds.setdefault(e, []).append(t)
+        combos = [("coulomb_friction", "action_delay"), ("mass_offset", "motor_lag"), ("coulomb_friction", "mass_offset"),
+                  ("action_delay", "actuator_saturation"), ("joint_stiffness", "sensor_offset"),
+                  ("coulomb_friction", "coulomb_friction"), ("viscous_damping", "motor_lag"),
+                  ("backlash", "coulomb_friction")]
+        for a, b in combos:
+            if a in kinds and b in kinds:
+                ta = kinds[a][0]
+                tb = kinds[b][-1] if a == b else kinds[b][0]
+                if a == b and ta == tb:
+                    continue
+                doubles.append((name, (a, ta), (b, tb)))
+    rng.shuffle(doubles)
+    for name, (a, ta), (b, tb) in doubles[:12]:
+        add_pair(name, "double", (((a, ta, 1), (b, tb, 2)), ((a, ta, 2), (b, tb, 1))))
+    return cases
+
+
+# ------------------------------------------------------------------------------------------------
+# simulation of the truth
+MAGNITUDES = {  # relative levels 0, 1, 2 of each effect (scaled per system in ``_truth``)
+    "coulomb_friction": (0.05, 0.1, 0.2),        # x the joint's RMS generalised force
+    "viscous_damping": (0.1, 0.2, 0.4),          # force at RMS speed, x RMS force
+    "joint_stiffness": (0.15, 0.3, 0.6),         # force at half the range, x RMS force
+    "sensor_offset": (0.02, 0.05, 0.1),          # rad; slides: x the travel
+    "mass_offset": (0.2, 0.4, 0.8),              # x the link's mass, at its tip
+    "action_delay": (0.0037, 0.0083, 0.0165),    # s (not whole samples at any rate used)
+    "motor_lag": (0.012, 0.025, 0.045),          # s
+    "actuator_saturation": (0.75, 0.55, 0.35),   # x the 99th percentile of |actuator force|
+    "backlash": (0.008, 0.016, 0.03),            # rad; slides: x 0.01 m
+}
+
+
+@dataclasses.dataclass
+class Truth:
+    mods: Mods
+    delay: float = 0.0          # s
+    lag: dict = dataclasses.field(default_factory=dict)       # actuator -> tau (s)
+    offset: dict = dataclasses.field(default_factory=dict)    # joint -> sensor offset
+    backlash: dict = dataclasses.field(default_factory=dict)  # joint -> dead-band width
+    coupling: dict = dataclasses.field(default_factory=dict)  # joint -> (mesh stiffness, mesh damping)
+    values: dict = dataclasses.field(default_factory=dict)    # what the diagnosis should find, by effect@target
+
+
+def _scales(system: System, nominal_xml: str, ctrl: np.ndarray, h: float, n: int, q0) -> dict:
+    """Per joint RMS generalised force, RMS speed and range; per actuator P99 |force|; from the
+    nominal plant under the recorded excitation (open loop) or the PD loop."""
+    m = mujoco.MjModel.from_xml_string(nominal_xml)
+    m.opt.timestep = h
+    d = mujoco.MjData(m)
+    d.qpos[:] = q0
+    frc, vel, pos, act = [], [], [], []
+    for k in range(len(ctrl)):
+        d.ctrl[:] = ctrl[k]
+        for _ in range(n):
+            mujoco.mj_step(m, d)
+        frc.append(d.qfrc_actuator + d.qfrc_bias - d.qfrc_passive)
+        vel.append(d.qvel.copy())
+        pos.append(d.qpos.copy())
+        act.append(d.actuator_force.copy())
+    frc, vel, pos, act = map(np.asarray, (frc, vel, pos, act))
+    return {"force": np.sqrt(np.mean(frc**2, 0)), "speed": np.sqrt(np.mean(vel**2, 0)),
+            "range": np.ptp(pos, 0), "act99": np.percentile(np.abs(act), 99, axis=0)}
+
+
+def _truth(case: Case, system: System, sc: dict) -> Truth:
+    joints = [lk.joint for lk in system.links]
+    links = {lk.name: lk for lk in system.links}
+    acts = {a.name: a for a in system.actuators}
+    tr = Truth(Mods())
+    for kind, target, factor in case.nominal:
+        if kind == "mass":
+            tr.mods.mass_scale[target] = factor
+        else:
+            tr.mods.damping_scale[target] = factor
+    for effect, target, level in case.effects:
+        mag = MAGNITUDES[effect][level]
+        if effect in ("coulomb_friction", "viscous_damping", "joint_stiffness", "sensor_offset"):
+            j = joints.index(target)
+            slide = system.links[j].jtype == "slide"
+            F = max(float(sc["force"][j]), 1e-6)
+            if effect == "coulomb_friction":
+                tr.mods.frictionloss[target] = mag * F
+                tr.values[f"{effect}@{target}"] = {f"coulomb:{target}": mag * F}
+            elif effect == "viscous_damping":
+                c = mag * F / max(float(sc["speed"][j]), 1e-6)
+                tr.mods.extra_damping[target] = c
+                tr.values[f"{effect}@{target}"] = {f"viscous:{target}": c}
+            elif effect == "joint_stiffness":
+                k = mag * F / max(0.5 * float(sc["range"][j]), 1e-6)
+                tr.mods.stiffness[target] = k
+                tr.values[f"{effect}@{target}"] = {f"stiffness:{target}": k}
+            else:
+                off = mag * (max(float(sc["range"][j]), 1e-3) if slide else 1.0)
+                tr.offset[target] = off
+                tr.values[f"{effect}@{target}"] = {f"sensor_offset:{target}": off}
+        elif effect == "mass_offset":
+            lk = links[target]
+            mp = mag * lk.mass
+            tr.mods.payload[target] = (mp, lk.tip)
+            tr.values[f"{effect}@{target}"] = {f"payload:{target}": mp}
+        elif effect == "action_delay":
+            tr.delay = mag
+            tr.values[effect] = {"action_delay_seconds": mag}
+        elif effect == "motor_lag":
+            tr.lag[target] = mag
+            tr.values[f"{effect}@{target}"] = {f"motor_lag:{target}": mag}
+        elif effect == "actuator_saturation":
+            a = list(acts).index(target)
+            lim = mag * max(float(sc["act99"][a]), 1e-6)
+            tr.mods.forcerange[target] = lim
+            tr.values[f"{effect}@{target}"] = {f"saturation:{target}": lim}
+        elif effect == "backlash":
+            a = acts[target]
+            lk = next(x for x in system.links if x.joint == a.joint)
+            width = mag * (0.01 if lk.jtype == "slide" else 1.0)
+            # the motor side: a light rotor meshing with the link through the dead band; the mesh
+            # is 30x stiffer than the link's own 5 Hz mode or the servo, the rotor's mesh mode
+            # stays below 2000 rad/s (stable at the truth's 0.25 ms step)
+            J = _joint_inertia(system, lk)
+            servo = a.kp * a.gear**2 if a.kind in ("position", "intvelocity") else 0.0
+            k_c = 30.0 * max(J * (2 * np.pi * 5.0) ** 2, servo)
+            J_r = max(0.05 * J, k_c / 2000.0**2)
+            tr.mods.rotor[a.joint] = J_r
+            tr.coupling[a.joint] = (k_c, 2 * 0.5 * math.sqrt(k_c * J_r))
+            tr.backlash[a.joint] = width
+            tr.values[f"{effect}@{target}"] = {f"backlash:{target}": width}
+    return tr
+
+
+def _joint_inertia(system: System, lk: Link) -> float:
+    if lk.jtype == "slide":
+        return lk.mass
+    pos, quat, inertia = _link_inertial(system, lk)
+    return float(np.max(inertia) + lk.mass * np.dot(pos, pos))
+
+
+def _excitation(system: System, design: Design, T: int, dt: float, rng, amp: float = 1.0) -> np.ndarray:
+    """Open-loop commands ``[T, nu]`` (servos: references), or references for the PD loop;
+    ``amp`` scales the open-loop commands about the middle of the ctrl range."""
+    t = np.arange(T) * dt
+    u = np.zeros((T, len(system.actuators)))
+    kind = design.excitation
+    for i, a in enumerate(system.actuators):
+        lo, hi = a.ctrlrange
+        mid, half = (lo + hi) / 2, (hi - lo) / 2
+        if kind in ("multisine", "pd"):
+            sig = np.zeros(T)
+            for f in rng.uniform(0.1, 2.5, size=6):
+                sig += np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
+            sig /= np.abs(sig).max() + 1e-12
+        elif kind == "chirp":
+            f0, f1 = 0.1, rng.uniform(2.0, 5.0)
+            sig = np.sin(2 * np.pi * (f0 * t + 0.5 * (f1 - f0) * t**2 / max(t[-1], 1e-9)))
+        elif kind == "prbs":
+            hold = max(1, int(rng.uniform(0.05, 0.25) / dt))
+            sig = np.repeat(rng.choice([-1.0, 1.0], size=T // hold + 1), hold)[:T]
+        else:  # random steps
+            sig = np.zeros(T)
+            k = 0
+            while k < T:
+                n = max(1, int(rng.uniform(0.2, 1.0) / dt))
+                sig[k:k + n] = rng.uniform(-1, 1)
+                k += n
+        if kind == "pd":  # a reference trajectory in joint units for the generator's own loop
+            u[:, i] = 0.5 * sig * (1.0 if _joint(system, a).jtype == "hinge" else 0.05)
+        else:
+            u[:, i] = np.clip(mid + 0.8 * amp * half * sig, lo, hi)
+    return u
+
+
+def _open_loop_amplitude(system: System, design: Design, nominal_xml: str, T: int, dt: float, seed: int,
+                         h: float, n: int, q0) -> float:
+    """The largest of 1, 1/2, 1/4, ... at which the nominal plant's open-loop motion stays within
+    the system's range (4 rad per hinge, 0.5 m per slide): arms swing and sliders drift, as in lab
+    data, but nothing whirls through dozens of turns."""
+    if design.excitation == "pd":
+        return 1.0
+    m = mujoco.MjModel.from_xml_string(nominal_xml)
+    m.opt.timestep = h
+    limit = np.array([system.max_range or (4.0 if lk.jtype == "hinge" else 0.5) for lk in system.links])
+    amp = 1.0
+    for _ in range(8):
+        u = _excitation(system, design, T, dt, np.random.default_rng(seed), amp)
+        d = mujoco.MjData(m)
+        d.qpos[:] = q0
+        lo, hi = np.array(q0, float), np.array(q0, float)
+        ok = True
+        for k in range(T):
+            d.ctrl[:] = u[k]
+            for _ in range(n):
+                mujoco.mj_step(m, d)
+            lo, hi = np.minimum(lo, d.qpos), np.maximum(hi, d.qpos)
+            if np.any(hi - lo > limit) or not np.all(np.isfinite(d.qpos)):
+                ok = False
+                break
+        if ok:
+            return amp
+        amp *= 0.5
+    return amp
+
+
+def _joint(system: System, a: Actuator) -> Link:
+    return next(lk for lk in system.links if lk.joint == a.joint)
+
+
+def simulate(system: System, design: Design, truth: Truth, truth_xml: str, ctrl_or_ref: np.ndarray,
+             q0: np.ndarray, rng, h: float, n: int) -> dict:
+    """Step the truth with ``mj_step`` and log at ``design.rate``; effects applied here.
+
+    The command logged at sample k is the one sent at t_k (held until t_k+1): the open-loop
+    excitation, or the PD loop's output computed from the *logged* (noisy, offset) positions.
+    """
+    m = mujoco.MjModel.from_xml_string(truth_xml)
+    m.opt.timestep = h
+    d = mujoco.MjData(m)
+    jn = [lk.joint for lk in system.links]
+    qadr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)] for j in jn]
+    dadr = [m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)] for j in jn]
+    rot = {j: (m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j + "_rotor")],
+               m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j + "_rotor")])
+           for j in truth.backlash}
+    for k, a in enumerate(qadr):
+        d.qpos[a] = q0[k]
+    for j, (qa, _) in rot.items():
+        d.qpos[qa] = d.qpos[qadr[jn.index(j)]]
+    for i, a in enumerate(system.actuators):  # integrating servos start at the joint's position
+        if a.kind == "intvelocity":
+            d.act[m.actuator_actadr[i]] = d.qpos[qadr[jn.index(a.joint)]]
+    dt = 1.0 / design.rate
+    T = len(ctrl_or_ref)
+    nu = len(system.actuators)
+    dt_h = dt / n
+    lag_state = None
+    sent = np.zeros((T, nu))
+    log_q = np.zeros((T, len(jn)))
+    log_v = np.zeros((T, len(jn)))
+    log_force = np.zeros((T, nu))
+    prev_meas = None
+    for k in range(T):
+        q_true = np.array([d.qpos[a] for a in qadr])
+        v_true = np.array([d.qvel[a] for a in dadr])
+        meas = q_true + np.array([truth.offset.get(j, 0.0) for j in jn])
+        if design.quant > 0:
+            meas = np.round(meas / design.quant) * design.quant
+        meas = meas + design.noise * rng.standard_normal(len(jn))
+        log_q[k] = meas
+        log_v[k] = v_true + 10 * design.noise * rng.standard_normal(len(jn)) + (
+            design.quant / dt * 0.3 * rng.standard_normal(len(jn)) if design.quant else 0.0)
+        if design.excitation == "pd":
+            vel = (meas - prev_meas) / dt if prev_meas is not None else np.zeros_like(meas)
+            for i, a in enumerate(system.actuators):
+                jj = jn.index(a.joint)
+                kp, kd = system.pd[i]
+                torque = kp * (ctrl_or_ref[k, i] - meas[jj]) - kd * vel[jj]
+                per_ctrl = a.gear if a.kind == "motor" else (a.gain if a.kind == "general" else 1.0)
+                sent[k, i] = np.clip(torque / per_ctrl, *a.ctrlrange)
+        else:
+            sent[k] = ctrl_or_ref[k]
+        prev_meas = meas
+        if lag_state is None:
+            lag_state = sent[0].copy()
+        for s in range(n):
+            t_now = (k * n + s) * dt_h
+            # delay line at the physics rate: the command sent at t - D is applied at t
+            kd_ = int(math.floor((t_now - truth.delay) / dt + 1e-9))
+            u = sent[max(kd_, 0)] if truth.delay > 0 else sent[k]
+            # first-order lag at the physics rate (forward Euler, as a drive's current loop runs)
+            for i, a in enumerate(system.actuators):
+                tau = truth.lag.get(a.name, 0.0)
+                if tau > 0:
+                    lag_state[i] += (dt_h / tau) * (u[i] - lag_state[i])
+                    u = u.copy()
+                    u[i] = lag_state[i]
+            d.ctrl[:] = u
+            d.qfrc_applied[:] = 0.0
+            for j, (qa, da) in rot.items():
+                jj = jn.index(j)
+                delta = d.qpos[qa] - d.qpos[qadr[jj]]
+                half = 0.5 * truth.backlash[j]
+                k_c, c_c = truth.coupling[j]
+                engaged = abs(delta) > half
+                tq = k_c * np.sign(delta) * max(abs(delta) - half, 0.0) + (
+                    c_c * (d.qvel[da] - d.qvel[dadr[jj]]) if engaged else 0.0)
+                d.qfrc_applied[dadr[jj]] += tq
+                d.qfrc_applied[da] -= tq
+            mujoco.mj_step(m, d)
+            if not np.all(np.isfinite(d.qpos)):
+                raise RuntimeError("the true plant diverged")
+        log_force[k] = d.actuator_force[:nu]
+    return {"qpos": log_q, "qvel": log_v, "ctrl": sent, "force": log_force, "q_true_end": q_true}
+
+
+def _q0(system: System, rng) -> np.ndarray:
+    q = []
+    for lk in system.links:
+        q.append(rng.uniform(-0.3, 0.3) if lk.jtype == "hinge" else rng.uniform(-0.02, 0.02))
+    return np.array(q)
+
+
+def physics_step(design: Design) -> tuple[float, int]:
+    """The truth's physics step (finer than the model's, and a whole fraction of the log period)."""
+    dt = 1.0 / design.rate
+    h_max = min(design.timestep, 0.001)
+    n = int(math.ceil(dt / h_max - 1e-9))
+    return dt / n, n
+
+
+def generate(case: Case, folder: str) -> dict:
+    """Write the case into ``folder``; returns its description (also ``truth.json``)."""
+    S = systems()
+    system = S[case.system]
+    design = case.design
+    os.makedirs(folder, exist_ok=True)
+    rng = np.random.default_rng(case.seed)
+    nominal_xml = write_mjcf(system, design.integrator, design.timestep, design.mass_mode,
+                             model_name=f"{case.system}_nominal")
+    h, n = physics_step(design)
+    if any(e == "backlash" for e, _, _ in case.effects):
+        n = int(math.ceil((1.0 / design.rate) / 0.00025 - 1e-9))  # the rotor mesh needs a finer step
+        h = 1.0 / design.rate / n
+    dt = 1.0 / design.rate
+    T = int(round(design.seconds / dt))
+    q0s = [_q0(system, rng) for _ in range(3)]
+    seeds = [int(x) for x in rng.integers(0, 2**31, size=3)]
+    amp = _open_loop_amplitude(system, design, nominal_xml, T, dt, seeds[0], h, n, q0s[0])
+    excs = [_excitation(system, design, T, dt, np.random.default_rng(sd), amp) for sd in seeds]
+    sc_ctrl = excs[0] if design.excitation != "pd" else np.zeros_like(excs[0])
+    if design.excitation == "pd":  # scales from an open-loop multisine of the same system
+        sc_ctrl = _excitation(system, dataclasses.replace(design, excitation="multisine"), T, dt,
+                              np.random.default_rng(case.seed + 7))
+    sc = _scales(system, nominal_xml, sc_ctrl, h, n, q0s[0])
+    truth = _truth(case, system, sc)
+    truth_xml = write_mjcf(system, design.integrator, design.timestep, design.mass_mode, truth.mods,
+                           model_name=f"{case.system}_truth")
+    with open(os.path.join(folder, "nominal.xml"), "w") as f:
+        f.write(nominal_xml)
+    t0 = float(rng.uniform(0, 1000))  # logger clocks do not start at 0
+    files = []
+    for r, name in enumerate(["train_0", "train_1", "heldout"]):
+        out = simulate(system, design, truth, truth_xml, excs[r], q0s[r], rng, h, n)
+        cols = {"time": t0 + np.arange(T) * dt}
+        for k, lk in enumerate(system.links):
+            cols[f"qpos:{lk.joint}"] = out["qpos"][:, k]
+        if design.qvel:
+            for k, lk in enumerate(system.links):
+                cols[f"qvel:{lk.joint}"] = out["qvel"][:, k]
+        for i, a in enumerate(system.actuators):
+            cols[f"ctrl:{a.name}"] = out["ctrl"][:, i]
+        path = os.path.join(folder, f"{name}.csv")
+        _write_csv(path, cols)
+        files.append(path)
+    desc = {"case": case.label, "seed": case.seed, "split": case.split, "system": case.system, "kind": case.kind,
+            "effects": [list(e) for e in case.effects], "nominal": [list(x) for x in case.nominal],
+            "design": dataclasses.asdict(design), "truth_values": truth.values, "open_loop_amplitude": amp,
+            "truth_physics_step": h, "files": [os.path.basename(p) for p in files]}
+    with open(os.path.join(folder, "truth.json"), "w") as f:
+        json.dump(desc, f, indent=1)
+    return desc
+
+
+def _write_csv(path: str, cols: dict) -> None:
+    names = list(cols)
+    data = np.column_stack([cols[c] for c in names])
+    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
+
+
+def fingerprint(cases: list[Case]) -> str:
+    """A hash of the case list, to show the frozen list did not change."""
+    text = json.dumps([dataclasses.asdict(c) for c in cases], sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
