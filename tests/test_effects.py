@@ -35,9 +35,12 @@ def test_effects_off_is_bitwise_neutral(name):
     qpos = jnp.asarray(rng.normal(size=env.mj_model.nq), jnp.float32)
     qvel = jnp.asarray(rng.normal(size=env.mj_model.nv), jnp.float32)
     es = fx.init_state()
+    n = env.config.frame_skip
     for _ in range(3):  # with a filled delay buffer too
-        u, es = fx.actuate(z, es, ctrl, qpos, env.dt)
-        np.testing.assert_array_equal(np.asarray(u), np.asarray(ctrl))
+        es = fx.push(es, ctrl)
+        for j in range(n):
+            u, es = fx.actuate(z, es, j, n, qpos, env.dt / n)
+            np.testing.assert_array_equal(np.asarray(u), np.asarray(ctrl))
     _, extra = fx.friction_damping(z, qvel)
     assert np.all(np.asarray(extra) == 0.0)
     np.testing.assert_array_equal(np.asarray(fx.sense(z, qpos, KEY)), np.asarray(qpos))
@@ -81,6 +84,7 @@ def pend():
         "payload": {"payload:pole": 0.5},
         "delay1": {"action_delay": 1.0},
         "delay_half": {"action_delay": 0.5},
+        "delay_0.9": {"action_delay": 0.9},
         "sensor_offset": {"sensor_offset:hinge": 0.3},
         "sensor_noise": {"sensor_noise:hinge": 0.05},
         "obs_noise": {"obs_noise": 0.1},
@@ -122,10 +126,16 @@ def test_saturation_clamps_the_force(pend):
 
 
 def test_delay_is_exact_whole_and_fractional(pend):
-    res, ctrl, _ = pend
+    """The pendulum runs 5 physics sub-steps per control step; ``force`` is the last sub-step's.
+    A delay of 1 step applies the previous command; 0.5 step switches to the new command half
+    way through the step (the last sub-step sees only the new one); 0.9 step puts the switch in
+    the middle of the last sub-step, which then sees half of each."""
+    res, ctrl, env = pend
+    assert env.config.frame_skip == 5
     prev = np.concatenate([[0.0], ctrl[:-1]])
     np.testing.assert_allclose(res["delay1"]["force"][:, 0], prev, atol=1e-6)
-    np.testing.assert_allclose(res["delay_half"]["force"][:, 0], 0.5 * ctrl + 0.5 * prev, atol=1e-6)
+    np.testing.assert_allclose(res["delay_half"]["force"][:, 0], ctrl, atol=1e-6)
+    np.testing.assert_allclose(res["delay_0.9"]["force"][:, 0], 0.5 * ctrl + 0.5 * prev, atol=1e-6)
 
 
 def test_motor_lag_is_first_order_filter(pend):

@@ -84,6 +84,53 @@ def effect_params(m: mujoco.MjModel, joints, actuators, bodies) -> list[Param]:
     return ps
 
 
+def link_axis(m: mujoco.MjModel, b: int) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """``(anchor, unit direction, length)`` of a body hinged to its parent: from the joint axis's
+    point through the centre of mass (body frame); None when the body has no hinge or its centre
+    of mass sits on the axis (a payload there is only a mass change)."""
+    if m.body_jntnum[b] != 1 or m.jnt_type[m.body_jntadr[b]] != mujoco.mjtJoint.mjJNT_HINGE:
+        return None
+    j = m.body_jntadr[b]
+    anchor = np.asarray(m.jnt_pos[j], float)
+    axis = np.asarray(m.jnt_axis[j], float)
+    r = np.asarray(m.body_ipos[b], float) - anchor
+    r = r - axis * np.dot(r, axis)  # the part perpendicular to the axis is what a payload acts through
+    length = float(np.linalg.norm(r))
+    if length < 1e-4:
+        return None
+    return anchor, r / length, length
+
+
+def payload_position_params(m: mujoco.MjModel, bodies) -> list[Param]:
+    """``payload_r:<body>``: distance of a payload from the joint axis along the link (through the
+    centre of mass), for hinged bodies; the payload sits at the link's far end (twice the centre
+    of mass distance, the tip of a uniform link) by default."""
+    ps = []
+    for b in bodies:
+        ax = link_axis(m, b)
+        if ax is None:
+            continue
+        length = ax[2]
+        ps.append(Param(f"payload_r:{name_of(m, _BODY, b)}", round(2 * length, 6), 0.0, round(4 * length, 6), "m",
+                        "distance of the payload from the joint axis, along the link", "payload_r", b))
+    return ps
+
+
+def backlash_inertia_params(m: mujoco.MjModel, actuators, default: float = 1e-2) -> list[Param]:
+    """``backlash_inertia:<act>``: the motor side's inertia crossing a backlash dead band (reflected
+    to the joint); defaults to the joint's armature, or ``default`` where it has none (the
+    effects library's fixed guess), so the default is neutral."""
+    ps = []
+    for a in actuators:
+        j = int(m.actuator_trnid[a, 0])
+        arm = float(m.dof_armature[m.jnt_dofadr[j]])
+        slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
+        ps.append(Param(f"backlash_inertia:{name_of(m, _ACT, a)}", arm if arm > 0 else default, 1e-7, 1e4,
+                        "kg" if slide else "kg m^2", "inertia of the motor side crossing the backlash band",
+                        "backlash_inertia", a))
+    return ps
+
+
 def body_mass_params(m: mujoco.MjModel, bodies) -> list[Param]:
     ps = []
     for b in bodies:

@@ -5,9 +5,14 @@ Each effect is off at its default value and then *exactly* neutral (every branch
 
 Pipeline of one control step (``Env.step``)::
 
-    action -> action_delay -> motor_lag -> backlash -> [MuJoCo: saturation via forcerange]
-    each physics substep: Coulomb/Stribeck friction as a velocity-dependent damping term
+    action enters the delay line (once per control step); then every physics sub-step:
+      delayed command (exact for fractional delays) -> motor_lag -> backlash
+      -> [MuJoCo: saturation via forcerange]; Coulomb/Stribeck friction as a damping term
     measured qpos = qpos + sensor_offset + sensor_noise * N(0, 1)
+
+The command path runs at the physics sub-step, so a delay or lag that is not a whole number of
+control steps acts when it should (a 1.4-step delay switches the command 0.4 of a step late, not
+blended over the step); with one sub-step per control step this is the per-step pipeline.
 
 Coulomb friction is written as ``f(v) = c(v) * v`` with ``c(v) = level(v) * tanh(v/eps) / v >= 0``
 and added to ``dof_damping`` for the substep: MuJoCo's Euler integrator treats damping
@@ -84,6 +89,8 @@ class Effects:
                             else np.where(arm > 0, arm, 1e-2))
         acts = np.arange(m.nu)
         self.r_backlash = _rows(spec, "backlash", acts)
+        # the motor side's inertia may be a parameter too (the diagnosis fits it); else the static guess
+        self.r_binertia = _rows(spec, "backlash_inertia", acts)
         self.r_lag = _rows(spec, "motor_lag", acts)
         self.r_gain = _rows(spec, "actuator_gain", acts)
         # joint-level friction entries
@@ -110,6 +117,17 @@ class Effects:
             gap_vel=jnp.zeros(nu),
         )
 
+    def steady_state(self, ctrl) -> EffectState:
+        """The command path at rest under ``ctrl [nu]``: the delay line full of it, the motor lag
+        settled on it (how a recording of a drive that was already running starts)."""
+        nu = self.nu
+        return EffectState(
+            action_buf=jnp.broadcast_to(ctrl, (self.cfg.max_delay + 2, nu)),
+            lag=jnp.asarray(ctrl, jnp.float32) + jnp.zeros(nu),
+            gap=jnp.zeros(nu),
+            gap_vel=jnp.zeros(nu),
+        )
+
     @staticmethod
     def _take(z, rows, default=0.0):
         rows = np.asarray(rows)
@@ -118,29 +136,48 @@ class Effects:
         vals = z[np.maximum(rows, 0)]
         return jnp.where(rows >= 0, vals, default)
 
-    def actuate(self, z, es: EffectState, ctrl, qpos, dt: float):
-        """Command pipeline: delay -> motor lag -> backlash.
+    def push(self, es: EffectState, ctrl) -> EffectState:
+        """A new command ``[nu]`` enters the delay line (once per control step)."""
+        return es.replace(action_buf=jnp.concatenate([ctrl[None], es.action_buf[:-1]], axis=0))
+
+    def delayed(self, z, es: EffectState, j, n: int):
+        """The command applied during physics sub-step ``j`` of ``n`` of the current control step.
+
+        A delay of ``d`` control steps (fractional allowed) shifts the piecewise-constant command
+        by ``d``; sub-step ``j`` spans ``[j/n, (j+1)/n)`` of the step, so it sees the shifted
+        command averaged over that span -- at most two neighbouring commands, weighted by how
+        much of the span each covers. Exact for any ``d`` and ``n``; with ``n = 1`` it is the
+        blend ``(1 - f) u[k] + f u[k+1]`` of the fractional part ``f``.
+        """
+        buf = es.action_buf
+        ctrl = buf[0]
+        if self.r_delay < 0:
+            return ctrl
+        d = z[self.r_delay]
+        a = j / n - d                        # start of the span, in steps, relative to this step
+        ka = jnp.floor(a)
+        w = jnp.clip((ka + 1.0 - a) * n, 0.0, 1.0)   # share of the span inside step ka
+        i = jnp.clip(-ka, 0, buf.shape[0] - 1).astype(jnp.int32)
+        newer = jnp.maximum(i - 1, 0)
+        delayed = w * buf[i] + (1.0 - w) * buf[newer]
+        return jnp.where(d > 0, delayed, ctrl)
+
+    def actuate(self, z, es: EffectState, j, n: int, qpos, h: float):
+        """Command pipeline for physics sub-step ``j`` of ``n``: delay -> motor lag -> backlash.
 
         Args:
           z: ``[P]`` physics vector (clipped).
-          es: effect state.
-          ctrl: ``[nu]`` command for this control step (already in ctrl units).
+          es: effect state (the command of this control step already ``push``-ed).
+          j: sub-step index (traced or static), ``n``: sub-steps per control step.
           qpos: ``[nq]`` current joint positions (true, for servo backlash).
-          dt: control period in seconds.
+          h: physics sub-step in seconds.
         Returns:
           ``(ctrl_applied [nu], new effect state)``.
         """
-        buf = jnp.concatenate([ctrl[None], es.action_buf[:-1]], axis=0)
-        u = ctrl
-        if self.r_delay >= 0:
-            d = z[self.r_delay]
-            k = jnp.floor(d).astype(jnp.int32)
-            frac = d - k
-            delayed = (1.0 - frac) * buf[k] + frac * buf[k + 1]
-            u = jnp.where(d > 0, delayed, ctrl)
-        # first-order motor lag, exact discretisation
+        u = self.delayed(z, es, j, n)
+        # first-order motor lag, exact discretisation over the sub-step
         tau = self._take(z, self.r_lag)
-        alpha = 1.0 - jnp.exp(-dt / jnp.maximum(tau, 1e-9))
+        alpha = 1.0 - jnp.exp(-h / jnp.maximum(tau, 1e-9))
         lagged = es.lag + alpha * (u - es.lag)
         u = jnp.where(tau > 0, lagged, u)
         lag_state = u
@@ -148,24 +185,25 @@ class Effects:
         b = self._take(z, self.r_backlash)
         gap, gap_vel = es.gap, es.gap_vel
         if self.nu:
-            h = 0.5 * b
+            half = 0.5 * b
             q = qpos[self.act_qpos]
             # servo: the spring between target and joint acts only outside the band
             err = u - q
-            servo_u = q + jnp.sign(err) * jnp.maximum(jnp.abs(err) - h, 0.0)
+            servo_u = q + jnp.sign(err) * jnp.maximum(jnp.abs(err) - half, 0.0)
             # motor: torque reaches the joint only once the motor side has crossed the band
             gain = jnp.where(self.r_gain >= 0, self._take(z, self.r_gain), self.act_gain)
             torque = gain * u
-            gv = gap_vel + dt * torque / self.act_inertia
-            g = gap + dt * gv
-            hit_hi, hit_lo = g >= h, g <= -h
+            inertia = jnp.where(self.r_binertia >= 0, self._take(z, self.r_binertia, 1.0), self.act_inertia)
+            gv = gap_vel + h * torque / jnp.maximum(inertia, 1e-9)
+            g = gap + h * gv
+            hit_hi, hit_lo = g >= half, g <= -half
             engaged = (hit_hi & (torque > 0)) | (hit_lo & (torque < 0))
             motor_u = jnp.where(engaged, u, 0.0)
             on = b > 0
-            gap = jnp.where(on & ~self.act_servo, jnp.clip(g, -h, h), gap)
+            gap = jnp.where(on & ~self.act_servo, jnp.clip(g, -half, half), gap)
             gap_vel = jnp.where(on & ~self.act_servo, jnp.where(hit_hi | hit_lo, 0.0, gv), gap_vel)
             u = jnp.where(on, jnp.where(self.act_servo, servo_u, motor_u), u)
-        return u, EffectState(action_buf=buf, lag=lag_state, gap=gap, gap_vel=gap_vel)
+        return u, es.replace(lag=lag_state, gap=gap, gap_vel=gap_vel)
 
     def friction_damping(self, z, qvel) -> tuple[np.ndarray, jax.Array]:
         """Coulomb/Stribeck friction as velocity-dependent damping for one substep.
@@ -192,6 +230,12 @@ class Effects:
         noise = std * jax.random.normal(key, off.shape)
         meas = qpos[self.sense_qpos] + off + noise
         return qpos.at[self.sense_qpos].set(jnp.where((off != 0) | (std > 0), meas, qpos[self.sense_qpos]))
+
+    def measure(self, z, qpos):
+        """Measured joint positions ``[nq]`` without noise: the true ones plus sensor offsets."""
+        if self.sense_qpos.size == 0:
+            return qpos
+        return qpos.at[self.sense_qpos].add(self._take(z, self.r_off))
 
     def unsense(self, z, qpos_meas):
         """Joint positions ``[nq]`` implied by measured ones under ``z``'s sensor offsets (noise ignored).

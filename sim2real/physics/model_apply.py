@@ -20,6 +20,7 @@ import numpy as np
 from mujoco import mjx
 
 from sim2real.physics import massprops
+from sim2real.physics.catalog import link_axis
 from sim2real.physics.params import ParamSpec, clip
 
 _NO_LIMIT = 1e30  # force clamp that never binds: exactly neutral
@@ -66,6 +67,11 @@ class PhysicsModel:
                 if m.site_bodyid[sid] != p.index:
                     raise ValueError(f"site 'payload_{name}' must belong to body '{name}'")
                 self.payload_pos[p.index] = np.asarray(m.site_pos[sid], np.float32)
+        # a payload_r parameter places the payload along the link instead (anchor + r * direction)
+        self.payload_axis = {}
+        for _, p in spec.of_kind("payload_r"):
+            anchor, direction, _ = link_axis(m, p.index)
+            self.payload_axis[p.index] = (np.asarray(anchor, np.float32), np.asarray(direction, np.float32))
         # parent chain for subtree masses (static)
         self.parent = np.asarray(m.body_parentid)
 
@@ -101,8 +107,9 @@ class PhysicsModel:
             scale = z[i] / p.default
             f["body_mass"] = get("body_mass").at[p.index].multiply(scale)
             f["body_inertia"] = get("body_inertia").at[p.index].multiply(scale)
+        where = {p.index: z[i] for i, p in spec.of_kind("payload_r")}
         for i, p in spec.of_kind("payload"):
-            f.update(self._add_payload(get, p.index, z[i]))
+            f.update(self._add_payload(get, p.index, z[i], where.get(p.index)))
         if "body_mass" in f:
             f["body_subtreemass"] = self._subtree_mass(f["body_mass"])
 
@@ -124,16 +131,16 @@ class PhysicsModel:
             f["jnt_stiffness"] = get("jnt_stiffness").at[p.index].add(z[i])
 
         # --- actuators --------------------------------------------------------------------
+        # gains scale the declared gain/bias law (exactly the declared model at the default): a
+        # position-like servo's stiffness bias -kp*q follows kp, its damping bias follows kv
         for i, p in spec.of_kind("actuator_gain"):
-            a = p.index
-            gear = float(self.mj.actuator_gear[a, 0])
-            gain = z[i] / gear
-            f["actuator_gainprm"] = get("actuator_gainprm").at[a, 0].set(gain)
-            if self.mj.actuator_biasprm[a, 1] != 0:  # servo: bias -kp*q follows kp
-                f["actuator_biasprm"] = get("actuator_biasprm").at[a, 1].set(-gain)
+            a, ratio = p.index, z[i] / p.default if p.default else z[i]
+            f["actuator_gainprm"] = get("actuator_gainprm").at[a, 0].set(m0.actuator_gainprm[a, 0] * ratio)
+            if self.mj.actuator_biasprm[a, 1] != 0:
+                f["actuator_biasprm"] = get("actuator_biasprm").at[a, 1].set(m0.actuator_biasprm[a, 1] * ratio)
         for i, p in spec.of_kind("actuator_kv"):
-            gear = float(self.mj.actuator_gear[p.index, 0])
-            f["actuator_biasprm"] = get("actuator_biasprm").at[p.index, 2].set(-z[i] / gear)
+            a, ratio = p.index, z[i] / p.default if p.default else z[i]
+            f["actuator_biasprm"] = get("actuator_biasprm").at[a, 2].set(m0.actuator_biasprm[a, 2] * ratio)
         for i, p in spec.of_kind("saturation"):
             a, s = p.index, z[i]
             on = s > 0
@@ -146,15 +153,20 @@ class PhysicsModel:
             model = model.replace(opt=model.opt.replace(gravity=jnp.array([0.0, 0.0, -1.0]) * g))
         return model
 
-    def _add_payload(self, get, b: int, mp):
-        """Point mass ``mp`` at the body's ``payload_<body>`` site (its centre of mass if none).
+    def _add_payload(self, get, b: int, mp, r=None):
+        """Point mass ``mp`` at distance ``r`` along the link (``payload_r``), else at the body's
+        ``payload_<body>`` site (its centre of mass if none).
 
         Mass, centre of mass and inertia follow (parallel-axis theorem); the result is kept
         diagonal in the body's principal frame, exact for a payload on a principal axis through
         the centre of mass, as at the tip of a link.
         """
         m, c = get("body_mass")[b], get("body_ipos")[b]
-        p = jnp.asarray(self.payload_pos.get(b, c))
+        if r is not None:
+            anchor, direction = self.payload_axis[b]
+            p = jnp.asarray(anchor) + r * jnp.asarray(direction)
+        else:
+            p = jnp.asarray(self.payload_pos.get(b, c))
         rot = massprops.quat_to_mat(get("body_iquat")[b])
         i_body = rot @ jnp.diag(get("body_inertia")[b]) @ rot.T
         c_new = (m * c + mp * p) / (m + mp)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import jax
+import jax.numpy as jnp
 from mujoco import mjx
 
 from sim2real.physics.effects import Effects, EffectState
@@ -24,15 +25,18 @@ def advance(effects: Effects, model: mjx.Model, z, data: mjx.Data, es: EffectSta
     Returns:
       ``(data, effect_state)`` after the step.
     """
-    u, es = effects.actuate(z, es, ctrl, data.qpos, dt)
-    data = data.replace(ctrl=u)
+    es = effects.push(es, ctrl)
     if qfrc_applied is not None:
         data = data.replace(qfrc_applied=qfrc_applied)
+    h = dt / substeps
 
-    def substep(d, _):
+    def substep(carry, j):
+        d, es = carry
+        u, es = effects.actuate(z, es, j, substeps, d.qpos, h)
+        d = d.replace(ctrl=u)
         dofs, extra = effects.friction_damping(z, d.qvel)
         m = model.replace(dof_damping=model.dof_damping.at[dofs].add(extra)) if dofs.size else model
-        return mjx.step(m, d), None
+        return (mjx.step(m, d), es), None
 
-    data, _ = jax.lax.scan(substep, data, None, length=substeps)
+    (data, es), _ = jax.lax.scan(substep, (data, es), jnp.arange(substeps))
     return data, es
