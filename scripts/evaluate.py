@@ -24,6 +24,7 @@ def main(argv):
     import numpy as np
 
     from sim2real import config as config_lib
+    from sim2real import output
     from sim2real.evaluate import episodes, grid, parse_axis
     from sim2real.plots import heatmap
     from sim2real.progress import Bar
@@ -37,20 +38,31 @@ def main(argv):
     if "run" not in args or "x" not in args:
         raise config_lib.ConfigError("evaluate needs run=RUN_DIR and x=name=low:high:count")
     run = str(args["run"])
+    if not os.path.isdir(run) or not os.path.exists(os.path.join(run, "config.yaml")):
+        raise FileNotFoundError(f"run={run}: not a run folder (no config.yaml)")
+    n_ep = args.get("episodes", 4)
+    if isinstance(n_ep, bool) or not isinstance(n_ep, int) or n_ep < 1:
+        raise config_lib.ConfigError(f"episodes={n_ep!r}: must be a positive integer")
+    seed = args.get("seed", 123)
+    if isinstance(seed, bool) or not isinstance(seed, int):
+        raise config_lib.ConfigError(f"seed={seed!r}: must be an integer")
+    axes = dict([parse_axis(str(args["x"]))] + ([parse_axis(str(args["y"]))] if "y" in args else []))
+    out = str(args.get("out", os.path.join(run, "eval")))
+    output.check(out, "evaluation", inputs=[os.path.join(run, "config.yaml")], overwrite=True)
     if os.path.isdir(os.path.join(run, "checkpoints")):
         cfg, env, algo, state = load_run(run)
         all_params, all_stats = algo.policy(state)           # leading seed axis
     else:  # a run folder copied without its checkpoints: the exported policies
         cfg, env, algo, all_params, all_stats = load_policy(run)
-    axes = dict([parse_axis(str(args["x"]))] + ([parse_axis(str(args["y"]))] if "y" in args else []))
+    for n in axes:
+        env.spec.index(n)  # an unknown name lists the known ones
     zs, names = grid(env, axes, base=algo.space.base if hasattr(algo, "space") else None)
     env.check_z(zs)
-    n_ep = int(args.get("episodes", 4))
     adapt = bool(args.get("adapt", False))
     if adapt and not hasattr(algo, "adapt"):
         raise config_lib.ConfigError(f"adapt=true needs an algorithm with an adaptation operator "
                                      f"(es_maml); run '{args['run']}' trained algo '{cfg.algo}'")
-    key = jax.random.PRNGKey(int(args.get("seed", 123)))
+    key = jax.random.PRNGKey(seed)
     shape = [len(v) for v in axes.values()]
 
     def cell_adapted(params, stats, z, k):
@@ -70,23 +82,21 @@ def main(argv):
                 rets.append(np.asarray(adapted(params, stats, jnp.asarray(zs), key)))
                 bar.step(text=f"seed {s}: adapted and evaluated")
     ret = np.mean(rets if adapt else before, 0).reshape(shape)
-    out = str(args.get("out", os.path.join(str(args["run"]), "eval")))
-    os.makedirs(out, exist_ok=True)
 
     def write(path, values):
-        tmp = path + ".tmp"
-        with open(tmp, "w") as f:
+        with open(path, "w") as f:
             f.write(",".join(names) + ",return\n")
             for z, r in zip(zs, np.ravel(values)):
                 f.write(",".join(f"{z[env.spec.index(n)]:.6g}" for n in names) + f",{r:.6g}\n")
-        os.replace(tmp, path)
 
-    write(os.path.join(out, "returns.csv"), ret)
-    if adapt:
-        write(os.path.join(out, "returns_before.csv"), np.mean(before, 0))
-    box = {n: (lo, hi) for n, lo, hi in zip(cfg.dr.params, cfg.dr.low, cfg.dr.high)}
-    title = f"{cfg.name}: mean return" + (" after adaptation" if adapt else "")
-    heatmap(axes, ret, os.path.join(out, "returns.png"), title=title, box=box)
+    # written aside and moved into place when complete; only an evaluation folder is replaced
+    with output.staged(out, "evaluation", inputs=[os.path.join(run, "config.yaml")], overwrite=True) as tmp:
+        write(os.path.join(tmp, "returns.csv"), ret)
+        if adapt:
+            write(os.path.join(tmp, "returns_before.csv"), np.mean(before, 0))
+        box = {n: (lo, hi) for n, lo, hi in zip(cfg.dr.params, cfg.dr.low, cfg.dr.high)}
+        title = f"{cfg.name}: mean return" + (" after adaptation" if adapt else "")
+        heatmap(axes, ret, os.path.join(tmp, "returns.png"), title=title, box=box)
     print(f"wrote {out}/returns.csv and returns.png; mean return {ret.mean():.1f}, "
           f"min {ret.min():.1f}, max {ret.max():.1f}"
           + (f" (before adaptation {np.mean(before):.1f})" if adapt else ""))

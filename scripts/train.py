@@ -9,13 +9,16 @@ from sim2real.cli import main_guard
 
 
 def main(argv):
-    from sim2real import config as config_lib
-    from sim2real.train import TrainConfig, summary, train
+    from sim2real.train import config_from_args, summary, train
 
-    cfg = config_lib.load(TrainConfig, argv)
+    cfg = config_from_args(argv)
     out = train(cfg)
-    last = {k: v for k, v in summary(out["metrics"]).items() if k in ("episode_return", "episode_length", "entropy", "fitness_mean", "fitness_max")}
-    print(f"run folder: {out['run_dir']}  last update: {last}")
+    if out["metrics"] is None:
+        print(f"run folder: {out['run_dir']}: finished already (raise total_steps= to train on)")
+        return
+    keys = ("episode_return", "episode_length", "entropy", "fitness_mean", "fitness_max")
+    last = {k: round(v, 4) for k, v in summary(out["metrics"]).items() if k in keys}
+    print(f"run folder: {out['run_dir']}  last chunk: {last}")
 
 
 if __name__ == "__main__":

@@ -12,9 +12,10 @@ import numpy as np
 import orbax.checkpoint as ocp
 
 
-def manager(directory: str, keep: int = 2) -> ocp.CheckpointManager:
+def manager(directory: str, keep: int = 2, create: bool = True) -> ocp.CheckpointManager:
+    """``create=False``: read an existing folder only (a refused resume must not write)."""
     return ocp.CheckpointManager(os.path.abspath(directory),
-                                 options=ocp.CheckpointManagerOptions(max_to_keep=keep, create=True))
+                                 options=ocp.CheckpointManagerOptions(max_to_keep=keep, create=create))
 
 
 def _flat(state) -> dict[str, jax.Array]:

@@ -83,6 +83,11 @@ def _coerce(value, t, where: str):
             return value
         raise ConfigError(f"{where}: expected true/false, got {value!r}")
     if t is int:
+        if isinstance(value, str):  # YAML 1.1 reads "1e5" (no dot) as a string
+            try:
+                value = float(value.replace("_", ""))
+            except ValueError:
+                pass
         if isinstance(value, bool) or not (isinstance(value, int) or (isinstance(value, float) and value.is_integer())):
             raise ConfigError(f"{where}: expected an integer, got {value!r}")
         return int(value)

@@ -91,7 +91,16 @@ def parse_axis(text: str) -> tuple[str, np.ndarray]:
     try:
         if ":" in spec:
             lo, hi, num = spec.split(":")
-            return name, np.linspace(float(lo), float(hi), int(num))
-        return name, np.array([float(v) for v in spec.split(",")])
-    except ValueError:
+            lo, hi, num = float(lo), float(hi), int(num)
+            if num < 1:
+                raise ValueError(f"grid axis '{text}': the count must be at least 1 (got {num})")
+            values = np.linspace(lo, hi, num)
+        else:
+            values = np.array([float(v) for v in spec.split(",")])
+    except ValueError as e:
+        if "count must be" in str(e):
+            raise
         raise ValueError(f"grid axis '{text}': cannot read '{spec}' as low:high:count or a list") from None
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"grid axis '{text}': values must be finite")
+    return name, values

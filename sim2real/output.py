@@ -111,6 +111,11 @@ def staged(path: str, kind: str, inputs=(), overwrite: bool = False, key: str = 
     without an exception. Yields the temporary folder."""
     p = check(path, kind, inputs, overwrite, key=key)
     parent = os.path.dirname(p)
+    made = []  # parent folders this call creates (removed again if the result never arrives)
+    probe = parent
+    while not os.path.exists(probe):
+        made.append(probe)
+        probe = os.path.dirname(probe)
     try:
         os.makedirs(parent, exist_ok=True)
     except OSError as e:
@@ -140,4 +145,9 @@ def staged(path: str, kind: str, inputs=(), overwrite: bool = False, key: str = 
             shutil.rmtree(old)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        for folder in made:  # deepest first
+            try:
+                os.rmdir(folder)
+            except OSError:
+                break
         raise

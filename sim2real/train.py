@@ -132,9 +132,8 @@ class Run:
         self.ckpt_dir = os.path.abspath(os.path.join(self.dir, "checkpoints"))
         self.metrics_path = os.path.join(self.dir, "metrics.csv")
 
-    def prepare(self) -> None:
-        """Create the run folder (or check the one resumed); a folder sim2real did not make is never
-        replaced (``sim2real.output``)."""
+    def check(self) -> None:
+        """Refuse a run folder that may not be used (before anything is written)."""
         cfg = self.cfg
         if cfg.resume:
             output.check(self.dir, "run", keep_existing=True, key="name")
@@ -144,8 +143,15 @@ class Run:
             if os.path.isdir(self.dir) and os.listdir(self.dir) and not cfg.overwrite:
                 raise FileExistsError(f"run folder '{self.dir}' exists; pass resume=true to continue it, "
                                       "overwrite=true to replace it, or another name=")
-            output.create(self.dir, "run", overwrite=cfg.overwrite, key="name")
-        config_lib.save(cfg, os.path.join(self.dir, "config.yaml"))
+            output.check(self.dir, "run", overwrite=cfg.overwrite, key="name")
+
+    def prepare(self) -> None:
+        """Create the run folder (a folder sim2real did not make is never replaced:
+        ``sim2real.output``) and write the resolved config."""
+        self.check()
+        if not self.cfg.resume:
+            output.create(self.dir, "run", overwrite=self.cfg.overwrite, key="name")
+        config_lib.save(self.cfg, os.path.join(self.dir, "config.yaml"))
 
 
 def _use_cpu_cores():
@@ -157,54 +163,139 @@ def _use_cpu_cores():
                       f"(the count is fixed when JAX starts); rollouts are split over those", stacklevel=3)
 
 
+# Keys that may differ between a run's saved config and the one it is resumed with: they change
+# how long it runs and what it reports, not what it computes.
+RESUMABLE_KEYS = ("total_steps", "max_chunks", "checkpoint_every", "keep_checkpoints", "tensorboard", "progress",
+                  "resume", "overwrite")
+
+
+def validate(cfg: TrainConfig) -> None:
+    """Refuse a config that cannot run, naming the key: before any folder is made or anything compiled."""
+    if not cfg.name or os.sep in cfg.name or cfg.name in (".", ".."):
+        raise config_lib.ConfigError(f"name={cfg.name!r}: a run name, without '{os.sep}' (the folder is out_dir/name)")
+    for key in ("num_seeds", "total_steps", "updates_per_chunk", "checkpoint_every", "keep_checkpoints"):
+        if getattr(cfg, key) < 1:
+            raise config_lib.ConfigError(f"{key}={getattr(cfg, key)}: must be a positive integer")
+    if cfg.max_chunks < 0:
+        raise config_lib.ConfigError(f"max_chunks={cfg.max_chunks}: must be >= 0 (0: run to the end)")
+    if cfg.resume and cfg.overwrite:
+        raise config_lib.ConfigError("resume=true and overwrite=true contradict each other; choose one")
+    from sim2real.rl.ppo import check
+
+    check(cfg.ppo)
+
+
+def config_from_args(argv: list[str]) -> TrainConfig:
+    """The command line's config. With ``resume=true`` the run's saved ``config.yaml`` is the config:
+    ``name``/``out_dir`` (given, or read from ``config=``) find it, and other ``key=value``s may only
+    change ``RESUMABLE_KEYS`` (anything else is refused, listed)."""
+    path, overrides = config_lib.parse_args(argv)
+    if overrides.get("resume") is not True:
+        return config_lib.load(TrainConfig, argv)
+    if overrides.get("overwrite") is True:
+        raise config_lib.ConfigError("resume=true and overwrite=true contradict each other; choose one")
+    start = config_lib.load(TrainConfig, ([f"config={path}"] if path else []))
+    name, out_dir = overrides.get("name", start.name), overrides.get("out_dir", start.out_dir)
+    saved = os.path.join(str(out_dir), str(name), "config.yaml")
+    if not os.path.exists(saved):
+        raise FileNotFoundError(f"resume=true but '{saved}' does not exist (no run named '{name}' in '{out_dir}')")
+    bad = sorted(k for k in overrides if k not in RESUMABLE_KEYS + ("name", "out_dir"))
+    if bad:
+        raise config_lib.ConfigError(f"resume=true continues the run with its saved config ({saved}); only "
+                                     f"{', '.join(RESUMABLE_KEYS)} may change, not {', '.join(bad)}")
+    return config_lib.load(TrainConfig, [f"config={saved}"] + [f"{k}={v if not isinstance(v, bool) else str(v).lower()}"
+                                                              for k, v in overrides.items()])
+
+
+def resume_config(cfg: TrainConfig) -> TrainConfig:
+    """The config a run is resumed with: its saved ``config.yaml``, with only ``RESUMABLE_KEYS`` taken
+    from ``cfg``; any other difference is refused with the list of differences."""
+    path = os.path.join(cfg.out_dir, cfg.name, "config.yaml")
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"resume=true but '{path}' does not exist (no run named '{cfg.name}' in "
+                                f"'{cfg.out_dir}')")
+    saved = config_lib.load(TrainConfig, [f"config={path}"])
+    mine, theirs = config_lib.to_dict(cfg), config_lib.to_dict(saved)
+    diffs = [f"{k}: run has {theirs[k]!r}, given {mine[k]!r}" for k in mine
+             if k not in RESUMABLE_KEYS and mine[k] != theirs[k]]
+    if diffs:
+        raise config_lib.ConfigError("resume=true continues the run as it was configured; these settings differ "
+                                     "from its saved config.yaml (give them as saved, or start a new run "
+                                     "with another name=):\n  " + "\n  ".join(diffs))
+    return dataclasses.replace(saved, **{k: getattr(cfg, k) for k in RESUMABLE_KEYS})
+
+
 def train(cfg: TrainConfig) -> dict:
-    """Run (or resume) training; returns ``{'state', 'metrics', 'run_dir', 'algo'}``."""
+    """Run (or resume) training; returns ``{'state', 'metrics', 'run_dir', 'algo', 'env', 'finished'}``.
+
+    Nothing is written until the config is validated and the algorithm built; a resume that fails
+    or is refused changes nothing on disk. SIGINT / SIGTERM stop after the chunk under way, with a
+    checkpoint (``sim2real.cli.Stopped``)."""
+    from sim2real.cli import Stopped, stop_on_signal
+
+    validate(cfg)
+    if cfg.resume:
+        cfg = resume_config(cfg)
     if cfg.ppo.split_envs:  # (on a GPU host the CPU device count changes nothing)
         _use_cpu_cores()
     env = make(cfg.env, **cfg.env_options)
     algo = build_algo(_without_warm_start(cfg) if cfg.resume else cfg, env)  # resume: the checkpoint is the start
     run = Run(cfg)
-    run.prepare()
+    run.check()
     seeds = jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds)
     # created under jit, so the state's arrays have exactly the layout chunk outputs have
     # (an eagerly built state costs a second compilation of the chunk on CPU)
     init_fn = getattr(algo, "init_seeds", None) or jax.vmap(algo.init)  # init_seeds: warm starts
     init = jax.jit(lambda k: strong_types(init_fn(k)))
     chunk = make_chunk(algo, cfg.updates_per_chunk)
-    state = init(seeds)
-    mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints)
+    per_update, n_chunks = steps_per_update(cfg, algo), num_chunks(cfg, algo)
     start = 0
     if cfg.resume:
+        mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints, create=False)
         step = mngr.latest_step()
         if step is None:
             raise FileNotFoundError(f"resume=true but '{run.ckpt_dir}' holds no checkpoint")
-        state = checkpoint.restore(mngr, step, state)
+        try:
+            state = checkpoint.restore(mngr, step, init(seeds))
+        except (ValueError, KeyError) as e:
+            raise ValueError(f"resume=true: the checkpoint in '{run.ckpt_dir}' does not fit this run's state "
+                             f"({str(e).splitlines()[0][:200]})") from None
         start = step
-    per_update, n_chunks = steps_per_update(cfg, algo), num_chunks(cfg, algo)
+        if start >= n_chunks:
+            mngr.close()
+            return {"state": state, "metrics": None, "run_dir": run.dir, "algo": algo, "env": env, "finished": True}
+    else:
+        state = init(seeds)
+    run.prepare()  # the first write: config validated, algorithm built, checkpoint read
+    mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints)
     logger = MetricsLogger(run, cfg, resume_from_update=start * cfg.updates_per_chunk, steps_per_update=per_update)
     end = n_chunks if not cfg.max_chunks else min(n_chunks, start + cfg.max_chunks)
     bar = Progress(cfg, total=n_chunks * cfg.updates_per_chunk * per_update,
                    done=start * cfg.updates_per_chunk * per_update)
     last = None
     try:
-        for c in range(start, end):
-            t0 = time.perf_counter()
-            state, metrics = chunk(state, c * cfg.updates_per_chunk)
-            metrics = jax.tree_util.tree_map(np.asarray, metrics)  # [S, K] per metric
-            dt = time.perf_counter() - t0
-            logger.write(c, metrics, dt)
-            last = metrics
-            done_chunks = c + 1
-            if done_chunks % cfg.checkpoint_every == 0 or done_chunks == end:
-                checkpoint.save(mngr, done_chunks, state)
-            bar.advance(cfg.updates_per_chunk * per_update * cfg.num_seeds / dt,
-                        cfg.updates_per_chunk * per_update, metrics)
+        with stop_on_signal() as stop:
+            for c in range(start, end):
+                t0 = time.perf_counter()
+                state, metrics = chunk(state, c * cfg.updates_per_chunk)
+                metrics = jax.tree_util.tree_map(np.asarray, metrics)  # [S, K] per metric
+                dt = time.perf_counter() - t0
+                logger.write(c, metrics, dt)
+                last = metrics
+                done_chunks = c + 1
+                if done_chunks % cfg.checkpoint_every == 0 or done_chunks == end or stop.requested:
+                    checkpoint.save(mngr, done_chunks, state)
+                bar.advance(cfg.updates_per_chunk * per_update * cfg.num_seeds / dt,
+                            cfg.updates_per_chunk * per_update, metrics)
+                if stop.requested:
+                    raise Stopped(f"{stop.signal_name} after chunk {done_chunks} of {n_chunks}; checkpoint saved in "
+                                  f"'{run.ckpt_dir}'; continue with name={cfg.name} resume=true")
     finally:
         mngr.wait_until_finished()
         bar.close()
         logger.close()
     export_policy(algo, state, os.path.join(run.dir, "policy.msgpack"))
-    return {"state": state, "metrics": last, "run_dir": run.dir, "algo": algo, "env": env}
+    return {"state": state, "metrics": last, "run_dir": run.dir, "algo": algo, "env": env, "finished": end == n_chunks}
 
 
 class MetricsLogger:
@@ -267,7 +358,9 @@ class MetricsLogger:
         if self.tb is not None:
             u = (chunk_index + 1) * k
             for n in names:
-                self.tb.add_scalar(n, float(np.nanmean(metrics[n][:, -1])), u * self.per_update)
+                last = metrics[n][:, -1]
+                if np.isfinite(last).any():  # (no episode ended: no point, not a 0)
+                    self.tb.add_scalar(n, float(np.nanmean(last)), u * self.per_update)
             self.tb.add_scalar("steps_per_second", k * self.per_update * cfg.num_seeds / seconds,
                                u * self.per_update)
 
@@ -297,6 +390,7 @@ class Progress:
                     TextColumn("{task.fields[info]}"), TimeRemainingColumn())
         self.p.start()
         self.task = self.p.add_task("train", total=total, completed=done, info="compiling...")
+        self.last_return = None
 
     def advance(self, sps: float, steps: int, metrics: dict):
         if not self.enabled:
@@ -304,9 +398,10 @@ class Progress:
         ret = metrics.get("episode_return")
         eps = metrics.get("episodes")
         info = f"{sps:,.0f} steps/s"
-        if ret is not None and eps is not None and eps[:, -1].sum() > 0:
-            r = np.sum(ret * eps) / max(np.sum(eps), 1)
-            info += f"  return {r:,.1f}"
+        if ret is not None and eps is not None and np.sum(eps) > 0:
+            self.last_return = float(np.nansum(np.where(eps > 0, ret * eps, 0.0)) / np.sum(eps))
+        if self.last_return is not None:  # the last known return (no episode may end in a chunk)
+            info += f"  return {self.last_return:,.1f}"
         elif "fitness_mean" in metrics:  # ES-MAML: return after adaptation, population mean
             info += f"  fitness {np.mean(metrics['fitness_mean'][:, -1]):,.1f}"
         self.p.update(self.task, advance=steps, info=info)
@@ -378,12 +473,14 @@ def load_run(run_dir: str, step: int | None = None):
 
 def summary(metrics: dict) -> dict:
     """Means over seeds and updates; episode statistics weighted by the episodes that ended."""
-    out = {k: float(jnp.mean(v)) for k, v in metrics.items()}
+    out = {k: float(np.nanmean(np.asarray(v))) if np.isfinite(np.asarray(v)).any() else float("nan")
+           for k, v in metrics.items()}
     eps = np.asarray(metrics.get("episodes", 0))
     for k in ("episode_return", "episode_length"):
         if k in metrics:
             if np.sum(eps) > 0:
-                out[k] = float(np.sum(np.asarray(metrics[k]) * eps) / np.sum(eps))
+                v = np.asarray(metrics[k])
+                out[k] = float(np.sum(np.where(eps > 0, v * eps, 0.0)) / np.sum(eps))
             else:  # no episode ended in these updates: there is no episode statistic to report
                 del out[k]
     return out

@@ -49,7 +49,12 @@ def test_existing_run_folder_is_not_clobbered(tmp_path):
 def test_recurrent_and_context_policies_train_over_seeds(tmp_path, extra):
     out = train(tiny(tmp_path, "name=x", *extra))
     m = out["metrics"]
-    assert all(np.isfinite(v).all() for v in m.values())
+    ended = m["episodes"] > 0  # episode statistics exist (are finite) exactly where an episode ended
+    for k, v in m.items():
+        if k in ("episode_return", "episode_length"):
+            assert np.isfinite(v[ended]).all() and np.isnan(v[~ended]).all(), k
+        else:
+            assert np.isfinite(v).all(), k
     if "num_seeds=2" in extra:  # two seeds, two different policies
         p = params_of(out)[0]
         assert p.shape[0] == 2 and not np.allclose(p[0], p[1])
@@ -104,3 +109,69 @@ def test_checkpoint_restore_places_leaves_like_the_template(tmp_path):
     before = step._cache_size()
     step(restored)
     assert step._cache_size() == before
+
+
+def _tree(folder):
+    import hashlib
+
+    out = {}
+    for base, _, files in os.walk(folder):
+        for f in files:
+            p = os.path.join(base, f)
+            out[os.path.relpath(p, folder)] = hashlib.sha256(open(p, "rb").read()).hexdigest()
+    return out
+
+
+def test_refused_resume_changes_nothing_and_names_the_differences(tmp_path):
+    train(tiny(tmp_path, "name=r", "max_chunks=1"))
+    before = _tree(tmp_path / "r")
+    with pytest.raises(config_lib.ConfigError, match="num_seeds: run has 1, given 2") as e:
+        train(tiny(tmp_path, "name=r", "num_seeds=2", "resume=true"))
+    assert "Traceback" not in str(e.value)
+    assert _tree(tmp_path / "r") == before
+    # from the command line: the saved config is the config; other keys are refused by name
+    from sim2real.train import config_from_args
+
+    with pytest.raises(config_lib.ConfigError, match="not ppo.lr"):
+        config_from_args([f"out_dir={tmp_path}", "name=r", "resume=true", "ppo.lr=0.1"])
+    cfg = config_from_args([f"out_dir={tmp_path}", "name=r", "resume=true", "total_steps=2048"])
+    assert cfg.ppo.num_envs == 8 and cfg.total_steps == 2048 and cfg.max_chunks == 1  # (as saved)
+
+
+def test_resuming_a_finished_run_says_so_or_extends_it(tmp_path):
+    train(tiny(tmp_path, "name=f"))
+    done = train(tiny(tmp_path, "name=f", "resume=true"))
+    assert done["finished"] and done["metrics"] is None
+    more = train(tiny(tmp_path, "name=f", "resume=true", "total_steps=2048"))
+    assert int(more["state"].update_step[0]) == 16 and more["finished"]
+
+
+def test_ctrl_c_stops_after_the_chunk_with_a_checkpoint(tmp_path, monkeypatch):
+    import signal
+
+    from sim2real import train as train_lib
+    from sim2real.cli import Stopped
+
+    write = train_lib.MetricsLogger.write
+
+    def write_then_interrupt(self, chunk_index, metrics, seconds):
+        write(self, chunk_index, metrics, seconds)
+        if chunk_index == 0:
+            os.kill(os.getpid(), signal.SIGINT)  # what Ctrl-C sends, mid-run
+
+    monkeypatch.setattr(train_lib.MetricsLogger, "write", write_then_interrupt)
+    with pytest.raises(Stopped, match="resume=true"):
+        train(tiny(tmp_path, "name=c"))
+    monkeypatch.undo()
+    assert sorted(os.listdir(tmp_path / "c" / "checkpoints")) == ["1"]
+    out = train(tiny(tmp_path, "name=c", "resume=true"))
+    assert int(out["state"].update_step[0]) == 8
+
+
+def test_updates_where_no_episode_ended_log_nan_not_zero(tmp_path):
+    # pendulum episodes last 200 steps; 16 steps per update: the first updates end no episode
+    train(tiny(tmp_path, "name=n", "total_steps=512"))
+    import csv
+
+    rows = list(csv.DictReader(open(tmp_path / "n" / "metrics.csv")))
+    assert rows[0]["episodes"] == "0" and rows[0]["episode_return"] == "nan"

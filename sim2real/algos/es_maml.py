@@ -193,7 +193,7 @@ class ESMAML:
         obs_stats = jax.tree_util.tree_map(lambda x: jnp.mean(x, 0), stats)
         st = st.replace(es=es_state, obs_stats=obs_stats, key=key, step=st.step + 1)
         return st, {"fitness_mean": jnp.mean(safe), "fitness_max": jnp.max(safe), "fitness_min": jnp.min(safe),
-                    "inner_train_return": jnp.mean(train_ret), "diverged_members": jnp.sum(~ok)}
+                    "inner_train_return": jnp.nanmean(train_ret), "diverged_members": jnp.sum(~ok)}
 
     def policy(self, st: ESMAMLState):
         return self.theta(st), st.obs_stats

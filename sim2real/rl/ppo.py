@@ -71,6 +71,34 @@ class PPOConfig:
         return self.num_envs * self.num_steps
 
 
+def check(cfg: PPOConfig, prefix: str = "ppo.") -> None:
+    """Refuse PPO settings that cannot run, naming the key (before anything is compiled or written)."""
+    for key in ("num_envs", "num_steps", "num_epochs", "num_minibatches"):
+        v = getattr(cfg, key)
+        if v < 1:
+            raise ValueError(f"{prefix}{key}={v}: must be a positive integer")
+    rules = {"lr": (0, None, False), "gamma": (0, 1, True), "gae_lambda": (0, 1, True), "clip_eps": (0, None, False),
+             "vf_coef": (0, None, True), "ent_coef": (0, None, True), "max_grad_norm": (0, None, False),
+             "reward_scale": (0, None, False)}
+    for key, (lo, hi, lo_ok) in rules.items():
+        v = float(getattr(cfg, key))
+        bad = not (v == v and abs(v) != float("inf")) or (v < lo if lo_ok else v <= lo) or (hi is not None and v > hi)
+        if bad:
+            rng = f"{'>=' if lo_ok else '>'} {lo}" + (f" and <= {hi}" if hi is not None else "")
+            raise ValueError(f"{prefix}{key}={v}: must be a finite number {rng}")
+    if cfg.net.kind not in ("mlp", "lstm"):
+        raise ValueError(f"{prefix}net.kind={cfg.net.kind!r}: choose mlp or lstm")
+    if any(int(h) < 1 for h in cfg.net.hidden) or cfg.net.lstm_size < 1:
+        raise ValueError(f"{prefix}net: layer sizes must be positive (hidden={list(cfg.net.hidden)}, "
+                         f"lstm_size={cfg.net.lstm_size})")
+    if cfg.net.kind == "lstm" and cfg.num_envs % cfg.num_minibatches:
+        raise ValueError(f"{prefix}num_envs={cfg.num_envs} must be divisible by {prefix}num_minibatches="
+                         f"{cfg.num_minibatches} for recurrent policies")
+    if cfg.batch_size % cfg.num_minibatches:
+        raise ValueError(f"{prefix}num_envs * {prefix}num_steps = {cfg.batch_size} must be divisible by "
+                         f"{prefix}num_minibatches={cfg.num_minibatches}")
+
+
 @struct.dataclass
 class PPOState:
     params: dict
@@ -97,6 +125,7 @@ class PPO:
         self.tx = optax.chain(optax.clip_by_global_norm(cfg.max_grad_norm), optax.adam(lr, eps=1e-5))
         self.net, _ = networks.init_params(jax.random.PRNGKey(0), cfg.net, env.obs_size, len(self.ctx),
                                            env.action_size)
+        check(cfg)
         if cfg.num_envs % cfg.num_minibatches and cfg.net.kind == "lstm":
             raise ValueError("num_envs must be divisible by num_minibatches for recurrent policies")
         if cfg.batch_size % cfg.num_minibatches:
@@ -117,9 +146,11 @@ class PPO:
                                     sample, self.cfg.num_steps, split=self.cfg.split_envs)
         st = st.replace(runner=runner, key=key)
         st, metrics = self.learn(st, batch, k_learn)
+        # no episode ended in this batch: there is no episode statistic (NaN, not a return of 0)
+        ended = ep["episodes"] > 0
         metrics.update(
-            episode_return=ep["return_sum"] / jnp.maximum(ep["episodes"], 1),
-            episode_length=ep["length_sum"] / jnp.maximum(ep["episodes"], 1),
+            episode_return=jnp.where(ended, ep["return_sum"] / jnp.maximum(ep["episodes"], 1), jnp.nan),
+            episode_length=jnp.where(ended, ep["length_sum"] / jnp.maximum(ep["episodes"], 1), jnp.nan),
             episodes=ep["episodes"], diverged=ep["diverged"],
         )
         return st, metrics
