@@ -72,7 +72,7 @@ def _param_errors(desc: dict, d: dict) -> dict[str, float]:
     return out
 
 
-def run_case(case: sysid_cases.Case, work: str) -> dict:
+def run_case(case: sysid_cases.Case, work: str, settings: dict | None = None) -> dict:
     from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
 
     folder = os.path.join(work, case.label)
@@ -80,7 +80,8 @@ def run_case(case: sysid_cases.Case, work: str) -> dict:
     if os.path.exists(desc_path):
         with open(desc_path) as f:
             desc = json.load(f)
-        if desc.get("design") != dataclasses.asdict(case.design):
+        if (desc.get("design") != dataclasses.asdict(case.design)
+                or desc.get("generator_version") != sysid_cases.GENERATOR_VERSION):
             desc = sysid_cases.generate(case, folder)
     else:
         desc = sysid_cases.generate(case, folder)
@@ -92,7 +93,8 @@ def run_case(case: sysid_cases.Case, work: str) -> dict:
         d = diagnose(DiagnoseConfig(model=os.path.join(folder, "nominal.xml"),
                                     recordings=(os.path.join(folder, "train_0.csv"), os.path.join(folder, "train_1.csv")),
                                     heldout=(os.path.join(folder, "heldout.csv"),),
-                                    out=os.path.join(folder, "diagnosis"), overwrite=True, plots=False, progress=False))
+                                    out=os.path.join(folder, "diagnosis"), overwrite=True, plots=False, progress=False,
+                                    **(settings or {})))
     except Exception as e:  # noqa: BLE001  (a crash is a wrong answer, reported as such)
         row.update(named="error", answer=f"error: {type(e).__name__}: {e}"[:300], correct=False,
                    seconds=round(time.time() - t0, 1), traceback=traceback.format_exc()[-600:])
@@ -163,6 +165,8 @@ def main():
     ap.add_argument("--tag", default="", help="suffix of the results folder")
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--note", default="", help="a line for the test-split log (why this look)")
+    ap.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
+                    help="diagnosis settings other than the defaults (tuning runs only)")
     args = ap.parse_args()
     cases = [c for c in sysid_cases.build_cases()
              if (args.split == "all" or c.split == args.split) and args.only in c.label]
@@ -170,19 +174,24 @@ def main():
     os.makedirs(args.work, exist_ok=True)
     out = os.path.join(args.out, args.split + args.tag)
     os.makedirs(out, exist_ok=True)
+    import yaml
+
+    settings = {k: yaml.safe_load(v) for k, v in (a.split("=", 1) for a in args.set)}
+    if settings and args.split == "test":
+        raise SystemExit("the test split is run with the defaults only")
     rows = []
     t_start = time.time()
     if args.jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(args.jobs) as ex:
-            futs = [ex.submit(run_case, c, args.work) for c in cases]
+            futs = [ex.submit(run_case, c, args.work, settings) for c in cases]
             for f in futs:
                 rows.append(f.result())
                 _print(rows[-1])
     else:
         for c in cases:
-            rows.append(run_case(c, args.work))
+            rows.append(run_case(c, args.work, settings))
             _print(rows[-1])
     keys = list(dict.fromkeys(k for r in rows for k in r))
     with open(os.path.join(out, "cases.csv"), "w", newline="") as f:

@@ -4,7 +4,7 @@
 
 With no model and no recordings it diagnoses the bundled EMPS hardware data (the demo):
 nominal axis model (mass + viscous friction under the drive's PD loop), fitted on DATA_EMPS,
-validated on DATA_EMPS_PULSES. Any field of ``sim2real.sysid.diagnose.DiagnoseConfig`` can be
+checked on DATA_EMPS_PULSES. Any field of ``sim2real.sysid.diagnose.DiagnoseConfig`` can be
 set as key=value. Writes DIR/diagnosis.json, DIR/report.md, DIR/fitted.xml and the figures.
 """
 import os
@@ -25,21 +25,24 @@ def main(argv):
                                                       f"recordings=[{emps.RECORDINGS['estimation']}]",
                                                       f"heldout=[{emps.RECORDINGS['validation']}]"])
     d = diagnose(cfg)
-    sel = d["effects"][0]
-    print(f"selected: {sel['effect']}" + (f" at {sel['target']}" if sel["target"] else "")
-          + f" (confidence {d['confidence']:.2f})")
-    for k, v in sel["params"].items():
-        print(f"  {k} = {v:.6g}")
+    print(f"answer: {d['answer']}")
+    for s in d["selected"]:
+        print(f"  {s['effect']}" + (f" at {s['target']}" if s["target"] else "")
+              + f"  (validation error x{s['validation_ratio']:.3f}, t = {s['t']:.1f})")
+        for k, v in s["params"].items():
+            std = s["std"].get(k)
+            print(f"    {k} = {v:.6g}" + (f" +- {std:.2g}" if std is not None and std == std else "")
+                  + (f" {s['units'][k]}" if k in s.get("units", {}) else ""))
     for note in d["notes"]:
-        print(f"  {note}")
+        print(f"  note: {note}")
     f = d["fit"]
-    print(f"held-out NRMSE ({f['metric']}): {f['before']:.4g} -> {f['after']:.4g} "
-          f"({100 * f['reduction']:.1f}% lower)")
+    print(f"held-out NRMSE ({f['metric']}): {f['before']:.4g} -> {f['after']:.4g} ({f['change']})")
     if demo:
-        fc = sel["params"].get("coulomb:axis")
-        asym = sel["params"].get("coulomb_asym:axis", 0.0)
-        ref = emps.REFERENCE
-        if fc is not None:
+        sel = next((s for s in d["selected"] if s["effect"] == "coulomb_friction"), None)
+        if sel is not None:
+            fc = sel["params"]["coulomb:axis"]
+            asym = sel["params"].get("coulomb_asym:axis", 0.0)
+            ref = emps.REFERENCE
             print(f"EMPS reference: Fc = {ref['Fc']} N (found {fc:.4g} N, {100 * abs(fc - ref['Fc']) / ref['Fc']:.1f}% off), "
                   f"offset = {ref['offset']} N (found {fc * asym:.4g} N)")
     print(f"report: {os.path.join(cfg.out, 'report.md')}  ({d['seconds']} s)")

@@ -40,30 +40,35 @@ def write_fitted_mjcf(xml_path: str, system, z: np.ndarray, fitted: dict[str, fl
         elif p.kind == "stiffness" and v > 0:
             j = spec.joint(system.joints[p.index])
             j.stiffness = _set0(j.stiffness, _first(j.stiffness) + v)
-        elif p.kind == "coulomb" and v > 0:
+        elif p.kind == "coulomb" and (v > 0 or p.default > 0):
             spec.joint(system.joints[p.index]).frictionloss = v
-        elif p.kind in ("actuator_gain", "actuator_kv") and v != p.default:
+        elif p.kind in ("actuator_gain", "actuator_kv") and v != p.default and p.default:
             a = spec.actuator(system.actuators[p.index])
-            gear = float(system.mj.actuator_gear[p.index, 0])
+            ratio = v / p.default  # the declared gain/bias law, scaled (as PhysicsModel.apply does)
+            m = system.mj
             if p.kind == "actuator_gain":
-                a.gainprm[0] = v / gear
-                if system.mj.actuator_biasprm[p.index, 1] != 0:
-                    a.biasprm[1] = -v / gear
+                a.gainprm[0] = float(m.actuator_gainprm[p.index, 0]) * ratio
+                if m.actuator_biasprm[p.index, 1] != 0:
+                    a.biasprm[1] = float(m.actuator_biasprm[p.index, 1]) * ratio
             else:
-                a.biasprm[2] = -v / gear
+                a.biasprm[2] = float(m.actuator_biasprm[p.index, 2]) * ratio
         elif p.kind == "saturation" and v > 0:
             a = spec.actuator(system.actuators[p.index])
             a.forcelimited = 1
             a.forcerange = [-v, v]
-        elif p.kind == "motor_lag" and v > 0:
+        elif p.kind == "motor_lag" and v > 0 and system.mj.actuator_dyntype[p.index] == 0:
+            # (an actuator with dynamics of its own cannot take a second filter: <numeric> only)
             a = spec.actuator(system.actuators[p.index])
             a.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
             a.dynprm[0] = v
-            a.gaintype = a.gaintype  # the filtered activation now drives the gain
             a.actlimited = 0
         elif p.kind == "payload" and v > 0:
             bname = system.bodies[p.index]
-            pos = system.physics.payload_pos.get(p.index, system.mj.body_ipos[p.index])
+            if p.index in system.physics.payload_axis:  # along the link, at the fitted distance
+                anchor, direction = system.physics.payload_axis[p.index]
+                pos = np.asarray(anchor) + zd[f"payload_r:{bname}"] * np.asarray(direction)
+            else:
+                pos = system.physics.payload_pos.get(p.index, system.mj.body_ipos[p.index])
             child = spec.body(bname).add_body(name=f"payload_mass_{bname}", pos=list(map(float, pos)))
             child.mass = v
             child.inertia = [1e-6 * v] * 3

@@ -12,9 +12,12 @@ import os
 import jax
 import numpy as np
 
+import jax.numpy as jnp
+
 from sim2real.envs.base import ASSETS
+from sim2real.physics import stepper
+from sim2real.physics.params import clip
 from sim2real.sysid.recordings import save_csv
-from sim2real.sysid.simulate import Simulator
 from sim2real.sysid.system import System
 
 SYSTEMS = {  # name -> (MJCF in envs/assets, seconds recorded, excitation scale of the ctrl range)
@@ -74,17 +77,36 @@ def excitation(system: System, T: int, dt: float, rng, scale: float) -> np.ndarr
 
 
 @functools.lru_cache(maxsize=None)
-def _plant(name: str) -> tuple[System, Simulator]:
-    """One system and simulator per plant (their jitted rollout compiles once per process)."""
+def _plant(name: str):
+    """One system and jitted rollout per plant (it compiles once per process).
+
+    ``rollout(z, q0 [nq], ctrl [T, nu]) -> (qpos [T, nq] as measured, ok [T])``: one control step
+    per sample at the model's timestep, through the effects library (the model-matched truth).
+    """
     system = System(os.path.join(ASSETS, SYSTEMS[name][0]))
-    return system, Simulator(system, float(system.mj.opt.timestep))
+    dt = float(system.mj.opt.timestep)
+
+    def rollout(z, q0, ctrl):
+        z = clip(system.spec, z)
+        model = system.physics.apply(z)
+        fx = system.effects
+        data = system.data0.replace(qpos=fx.unsense(z, q0))
+
+        def step(carry, u):
+            d, es = carry
+            d, es = stepper.advance(fx, model, z, d, es, u, dt, 1)
+            ok = jnp.isfinite(d.qpos).all() & jnp.isfinite(d.qvel).all()
+            return (d, es), (fx.measure(z, d.qpos), ok)
+
+        return jax.lax.scan(step, (data, fx.init_state()), ctrl)[1]
+
+    return system, jax.jit(rollout), dt
 
 
 def record(case: Case, path: str) -> dict:
     """Simulate ``case`` and write its recording CSV; returns the true physics (spec name -> value)."""
     _, seconds, scale = SYSTEMS[case.system]
-    system, sim = _plant(case.system)
-    dt = sim.dt
+    system, rollout, dt = _plant(case.system)
     T = int(seconds / dt)
     rng = np.random.default_rng(case.seed)
     truth = dict(case.nominal) | dict(case.values)
@@ -93,11 +115,10 @@ def record(case: Case, path: str) -> dict:
     q0 = np.asarray(system.mj.qpos0, np.float32) + rng.uniform(-0.05, 0.05, system.mj.nq).astype(np.float32)
     if case.system == "cartpole":  # start hanging down, slightly off
         q0[1] = np.pi + rng.uniform(-0.1, 0.1)
-    out = sim.rollout(jax.numpy.asarray(z), q0, np.zeros(system.mj.nv, np.float32), ctrl.astype(np.float32),
-                      np.zeros((T, system.mj.nv), np.float32), sim.initial_state())
-    if not bool(np.all(out["ok"])):
+    qpos, ok = rollout(jnp.asarray(z), jnp.asarray(q0), jnp.asarray(ctrl, jnp.float32))
+    if not bool(np.all(ok)):
         raise RuntimeError(f"{case.label}: the true plant diverged while recording")
-    qpos = np.asarray(out["qpos"], np.float64)
+    qpos = np.asarray(qpos, np.float64)
     qpos = qpos + case.noise * rng.standard_normal(qpos.shape)
     cols = {f"qpos:{j}": qpos[:, k] for k, j in enumerate(system.joints)}
     # the command recorded at sample k drove the step k -> k+1, which produced qpos[k]; align as

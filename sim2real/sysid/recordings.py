@@ -189,7 +189,9 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
         raise RecordingError(f"{path}: time goes backwards at data row {row + 1} ({t[row]} -> {t[row + 1]})")
     med = np.median(dt)
     jitter = np.abs(dt - med) / med
-    if jitter.max() > 0.05:
+    # a logger's clock jitters (DFKI's pendulum: one step 6% long in 8000); the samples are taken
+    # as uniform at the median step up to a quarter of a step, a missing sample or more is refused
+    if jitter.max() > 0.25:
         row = int(np.argmax(jitter)) + 1
         raise RecordingError(f"{path}: non-uniform sampling at data row {row + 1}: step {dt[row - 1]:.6g} s "
                              f"vs median {med:.6g} s (resample to a fixed rate first)")

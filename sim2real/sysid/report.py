@@ -1,4 +1,4 @@
-"""Plots and the Markdown report of a diagnosis."""
+"""Figures and the Markdown report of a diagnosis (units from the parameter spec)."""
 from __future__ import annotations
 
 import os
@@ -10,41 +10,124 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-def overlay(path, time, signals: dict, title: str, zoom: tuple[float, float] | None = None):
-    """Measured vs nominal vs fitted, one panel per signal (+ a zoom column)."""
-    n = len(signals)
-    cols = 2 if zoom else 1
-    fig, axes = plt.subplots(n, cols, figsize=(5.5 * cols, 2.4 * n), squeeze=False)
-    for r, (name, s) in enumerate(signals.items()):
-        for c in range(cols):
-            ax = axes[r, c]
-            sel = slice(None) if c == 0 else (time >= zoom[0]) & (time <= zoom[1])
-            ax.plot(time[sel], s["measured"][sel], "k", lw=1.2, label="measured")
-            ax.plot(time[sel], s["nominal"][sel], "C3", lw=0.9, alpha=0.8, label="nominal model")
-            ax.plot(time[sel], s["fitted"][sel], "C0", lw=0.9, alpha=0.8, label="fitted model")
-            ax.set_ylabel(name, fontsize=8)
-            ax.tick_params(labelsize=7)
-            if r == 0:
-                ax.set_title(title if c == 0 else f"zoom {zoom[0]:.2f}-{zoom[1]:.2f} s", fontsize=9)
-            if r == n - 1:
-                ax.set_xlabel("time [s]", fontsize=8)
-    axes[0, 0].legend(fontsize=7)
+def _stitch(sh, pred, tiles, key, k, traj_index):
+    """Predictions of segments of one trajectory placed on its time axis (NaN elsewhere)."""
+    tr = sh.trajs[traj_index]
+    offset = sum(len(t) for t in sh.trajs[:traj_index])
+    out = np.full(len(tr), np.nan)
+    for i, s in enumerate(tiles):
+        if sh.tiles.traj[s] != traj_index:
+            continue
+        st = int(sh.tiles.start[s] - offset)
+        seg = np.where(pred["ok"][0][i], pred[key][0][i, :, k], np.nan)
+        out[st + 1: st + 1 + sh.H] = seg
+    return out
+
+
+def overlay(path, sh, tiles, pred_b, pred_a, traj_index, names, units):
+    """Measured vs nominal vs fitted predictions, one panel per signal, residuals underneath."""
+    tr = sh.trajs[traj_index]
+    rows = []
+    for key in sh.signals:
+        for k, nm in enumerate(names[key]):
+            rows.append((key, k, nm))
+    fig, axes = plt.subplots(2 * len(rows), 1, figsize=(9, 2.3 * len(rows) + 0.8), squeeze=False,
+                             gridspec_kw={"height_ratios": [3, 1.3] * len(rows)}, sharex=True)
+    offset = sum(len(t) for t in sh.trajs[:traj_index])
+    for r, (key, k, nm) in enumerate(rows):
+        meas = {"qpos": tr.q, "qvel": tr.qvel, "force": tr.force}[key][:, k]
+        nb, na = _stitch(sh, pred_b, tiles, key, k, traj_index), _stitch(sh, pred_a, tiles, key, k, traj_index)
+        ax, ax2 = axes[2 * r, 0], axes[2 * r + 1, 0]
+        ax.plot(tr.time, meas, "k", lw=1.1, label="measured")
+        ax.plot(tr.time, nb, "C3", lw=0.9, alpha=0.85, label="nominal model")
+        ax.plot(tr.time, na, "C0", lw=0.9, alpha=0.85, label="fitted model")
+        for s in tiles:
+            if sh.tiles.traj[s] == traj_index:
+                ax.axvline(tr.time[int(sh.tiles.start[s] - offset)], color="0.85", lw=0.5, zorder=0)
+        ax.set_ylabel(f"{nm} [{units.get(nm, '')}]", fontsize=8)
+        ax2.plot(tr.time, nb - meas, "C3", lw=0.8)
+        ax2.plot(tr.time, na - meas, "C0", lw=0.8)
+        ax2.axhline(0, color="k", lw=0.5)
+        ax2.set_ylabel("error", fontsize=7)
+        for a in (ax, ax2):
+            a.tick_params(labelsize=7)
+        if r == 0:
+            ax.legend(fontsize=7, ncol=3)
+            ax.set_title(f"{tr.name}: {sh.H * tr.dt:.3g} s predictions from measured states (grey lines: segment starts)",
+                         fontsize=9)
+    axes[-1, 0].set_xlabel("time [s]", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def steps_plot(path, steps: list[dict]):
+    """Validation and held-out error after each forward-selection step (lower is better)."""
+    fig, ax = plt.subplots(figsize=(6.5, 0.45 * len(steps) + 1.6))
+    labels = [s["model"] for s in steps]
+    y = np.arange(len(steps))
+    v0, h0 = steps[0]["validation"], steps[0]["heldout_nrmse"]
+    ax.barh(y - 0.18, [s["validation"] / v0 for s in steps], 0.36, color="C0", label="validation segments")
+    ax.barh(y + 0.18, [s["heldout_nrmse"] / h0 for s in steps], 0.36, color="C2", label="held-out NRMSE")
+    for yi, s in zip(y, steps):
+        if not s["kept"]:
+            ax.text(0.02, yi, "not kept (held-out check)", fontsize=7, va="center", color="C3")
+    ax.set_yticks(y, labels, fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("prediction error relative to the nominal re-fit ('none'); lower is better")
+    ax.legend(fontsize=7)
+    ax.set_title("forward selection: error after each step", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def regimes_plot(path, tables: dict, title: str):
-    """Bar chart of residual excess per regime (before and after the fit), per joint."""
+def ranking_plot(path, rows: list[dict], top: int = 14):
+    """The first round's screen, best score first (a fitted candidate shows its validation ratio)."""
+    rows = rows[:top]
+    fig, ax = plt.subplots(figsize=(6.5, 0.33 * len(rows) + 1.4))
+    labels = [f"{r['effect']}@{r['target']}" if r["target"] else r["effect"] for r in rows]
+    vals = [max(r["screen_score"], 0.0) for r in rows]
+    colors = ["C0" if r.get("passed") else ("C1" if "validation_ratio" in r else "C7") for r in rows]
+    ax.barh(range(len(rows)), vals, color=colors)
+    for i, r in enumerate(rows):
+        if "validation_ratio" in r:
+            ax.text(vals[i], i, f"  validation x{r['validation_ratio']:.3f}, t={r['t']:.1f}", fontsize=7, va="center")
+    ax.set_yticks(range(len(rows)), labels, fontsize=7)
+    ax.invert_yaxis()
+    ax.set_xlabel("screen score: linearised drop of the training objective (fraction; higher is better)")
+    ax.set_title("candidates on top of the nominal re-fit, best score first\n(blue: named, orange: fitted, not named)",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def residual_vs_velocity(path, v, before, after, joint, unit_force, unit_vel):
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    k = max(1, len(v) // 4000)
+    ax.plot(v[::k], before[::k], ".", ms=2, alpha=0.4, color="C3", label="nominal")
+    ax.plot(v[::k], after[::k], ".", ms=2, alpha=0.4, color="C0", label="fitted (static part)")
+    ax.axhline(0, color="k", lw=0.6)
+    ax.set_xlabel(f"velocity of {joint} [{unit_vel}]")
+    ax.set_ylabel(f"inverse-dynamics residual [{unit_force}]")
+    ax.set_title("residual vs velocity (a step at 0: Coulomb friction; a slope: viscous)", fontsize=9)
+    ax.legend(fontsize=7, markerscale=4)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def regimes_plot(path, regimes: dict, title: str):
+    """Residual RMS in each regime relative to overall, per joint (1 = no concentration)."""
     fig, ax = plt.subplots(figsize=(6.5, 3.2))
-    names = sorted({k for t in tables.values() for k in t})
-    width = 0.8 / max(len(tables), 1)
-    for i, (label, t) in enumerate(tables.items()):
+    names = sorted({k for t in regimes.values() for k in t})
+    width = 0.8 / max(len(regimes), 1)
+    for i, (joint, t) in enumerate(regimes.items()):
         vals = [t.get(n, {}).get("excess") or 0.0 for n in names]
-        ax.bar(np.arange(len(names)) + i * width, vals, width, label=label)
+        ax.bar(np.arange(len(names)) + i * width, vals, width, label=joint)
     ax.axhline(1.0, color="gray", lw=0.8)
-    ax.set_xticks(np.arange(len(names)) + width * (len(tables) - 1) / 2)
-    ax.set_xticklabels(names, rotation=20, fontsize=7, ha="right")
+    ax.set_xticks(np.arange(len(names)) + width * (len(regimes) - 1) / 2, names, rotation=20, fontsize=7, ha="right")
     ax.set_ylabel("residual RMS in regime / overall")
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7)
@@ -53,77 +136,97 @@ def regimes_plot(path, tables: dict, title: str):
     plt.close(fig)
 
 
-def ranking_plot(path, rows: list[dict], top: int = 12):
-    rows = rows[:top]
-    fig, ax = plt.subplots(figsize=(6.5, 0.35 * len(rows) + 1.2))
-    labels = [f"{r['effect']}@{r['target']}" if r["target"] else r["effect"] for r in rows]
-    vals = [r["heldout_ratio"] for r in rows]
-    ax.barh(range(len(rows)), vals, color=["C0" if i == 0 else "C7" for i in range(len(rows))])
-    ax.set_yticks(range(len(rows)))
-    ax.set_yticklabels(labels, fontsize=7)
-    ax.invert_yaxis()
-    ax.axvline(1.0, color="C3", lw=0.8)
-    ax.set_xlabel("held-out residual RMSE / nominal re-fit ('none')")
-    ax.set_title("candidates, best BIC first", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_rows) -> dict[str, str]:
+    from sim2real.sysid.diagnose import _signal_names
+
+    names = _signal_names(sh)
+    units = {}
+    for j, jn in enumerate(system.joints):
+        slide = system.mj.jnt_type[j] == 2
+        units[f"qpos:{jn}"] = "m" if slide else "rad"
+        units[f"qvel:{jn}"] = "m/s" if slide else "rad/s"
+    for a, an in enumerate(system.actuators):
+        slide = system.mj.jnt_type[system.mj.actuator_trnid[a, 0]] == 2
+        units[f"force:{an}"] = "N" if slide else "N m"
+    images = {}
+    ti = int(sh.tiles.traj[tiles[0]])
+    overlay(os.path.join(out, "overlay.png"), sh, tiles, pred_b, pred_a, ti, names, units)
+    images["Sim vs real on held-out data"] = "overlay.png"
+    steps_plot(os.path.join(out, "steps.png"), d["steps"])
+    images["Forward selection"] = "steps.png"
+    if d["effects"]:
+        ranking_plot(os.path.join(out, "candidates.png"), d["effects"])
+        images["Candidate screen"] = "candidates.png"
+    before, after = invdyn_rows
+    m = system.mj
+    j = int(np.argmax([np.sqrt(np.mean(before["r"][:, m.jnt_dofadr[k]] ** 2)) /
+                       (np.std(before["act"][:, m.jnt_dofadr[k]]) + np.std(before["r"][:, m.jnt_dofadr[k]]) + 1e-12)
+                       for k in range(m.njnt)]))
+    dof = m.jnt_dofadr[j]
+    slide = m.jnt_type[j] == 2
+    residual_vs_velocity(os.path.join(out, "residual_vs_velocity.png"), before["v"][:, dof], before["r"][:, dof],
+                         after["r"][:, dof], system.joints[j], "N" if slide else "Nm", "m/s" if slide else "rad/s")
+    images["Residual vs velocity"] = "residual_vs_velocity.png"
+    regimes_plot(os.path.join(out, "regimes.png"), d["mismatch"]["regimes"],
+                 "where the nominal model's inverse-dynamics residual sits")
+    images["Residual by regime"] = "regimes.png"
+    return images
 
 
-def residual_vs_velocity(path, v: np.ndarray, before: np.ndarray, after: np.ndarray, joint: str):
-    fig, ax = plt.subplots(figsize=(5, 3.5))
-    k = max(1, len(v) // 4000)
-    ax.plot(v[::k], before[::k], ".", ms=2, alpha=0.4, color="C3", label="nominal")
-    ax.plot(v[::k], after[::k], ".", ms=2, alpha=0.4, color="C0", label="fitted")
-    ax.axhline(0, color="k", lw=0.6)
-    ax.set_xlabel(f"velocity of {joint}")
-    ax.set_ylabel("inverse-dynamics residual")
-    ax.set_title("residual vs velocity (a step at 0 = Coulomb friction)", fontsize=9)
-    ax.legend(fontsize=7, markerscale=4)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+def _fmt(v):
+    return "" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.4g}"
 
 
 def markdown(path: str, d: dict, images: dict[str, str]) -> None:
-    sel = d["effects"][0]
     fit = d["fit"]
     L = [f"# Diagnosis of `{os.path.basename(d['model'])}`", ""]
-    L += [f"**Selected: `{sel['effect']}`" + (f" at `{sel['target']}`" if sel["target"] else "") +
-          f"** (confidence {d['confidence']:.2f}).", ""]
-    if sel["params"]:
-        L += ["| parameter | value | std |", "|---|---|---|"]
-        for k, v in sel["params"].items():
-            L.append(f"| `{k}` | {v:.6g} | {sel['std'].get(k, float('nan')):.3g} |")
+    if d["answer"] == "effects":
+        L.append("**Missing physics found:** " + ", ".join(
+            f"`{s['effect']}`" + (f" at `{s['target']}`" if s["target"] else "") for s in d["selected"]) + ".")
+    elif d["answer"] == "none":
+        L.append("**No missing effect found**: the nominal model (re-fitted parameters below) predicts the data "
+                 "as well as any candidate.")
+    else:
+        L.append("**Inconclusive**: effects improved the training recordings but not the held-out ones (notes).")
+    L.append("")
+    for s in d["selected"]:
+        L += [f"### `{s['effect']}`" + (f" at `{s['target']}`" if s["target"] else ""), "",
+              f"Validation error x{s['validation_ratio']:.3f} of the model before it (paired t = {s['t']:.1f}).", "",
+              "| parameter | value | std | unit |", "|---|---|---|---|"]
+        for k, v in s["params"].items():
+            L.append(f"| `{k}` | {v:.6g} | {_fmt(s['std'].get(k))} | {s.get('units', {}).get(k, 's' if k.endswith('seconds') else '')} |")
+        if s.get("note"):
+            L.append(f"\n{s['note']}")
         L.append("")
-    for note in d.get("notes", []):
-        L.append(f"- {note}")
-    L += ["", "## Fit on held-out data", "",
+    L += ["## Fit on held-out data", "",
           f"Normalised RMSE of {fit['metric']}, mean over signals: **{fit['before']:.4g} -> {fit['after']:.4g}** "
-          f"({100 * (1 - fit['after'] / max(fit['before'], 1e-300)):.1f}% lower), on {', '.join(fit['recordings'])}.", "",
+          f"({fit['change']}), on {', '.join(fit['recordings'])}.", "",
           "| signal | before | after |", "|---|---|---|"]
     for s, v in fit["per_signal"].items():
         L.append(f"| {s} | {v['before']:.4g} | {v['after']:.4g} |")
-    L += ["", f"Fitted MJCF: `{d['fitted_mjcf']}`", ""]
+    L += ["", "## Steps", "", "| model | training objective | validation objective | held-out NRMSE | kept |", "|---|---|---|---|---|"]
+    for s in d["steps"]:
+        L.append(f"| {s['model']} | {s['objective']:.4g} | {s['validation']:.4g} | {s['heldout_nrmse']:.4g} | "
+                 f"{'yes' if s['kept'] else 'no'} |")
+    L += ["", "## Nominal parameters re-fitted", "", "| parameter | nominal | fitted | std | unit |", "|---|---|---|---|---|"]
+    for n, v in d["nominal_refit"].items():
+        L.append(f"| `{n}` | {v['nominal']:.6g} | {v['fitted']:.6g} | {_fmt(v['std'])} | {v['unit']} |")
+    if d["notes"]:
+        L += ["", "## Notes", ""] + [f"- {n}" for n in d["notes"]]
+    L += ["", f"Fitted MJCF: `{d['fitted_mjcf']}`" if d["fitted_mjcf"] else "Fitted MJCF: not written (notes).", ""]
     L += ["## Where the nominal model is wrong", "", "| signal | NRMSE | offset ratio |", "|---|---|---|"]
     for s, v in d["mismatch"]["signals"].items():
         L.append(f"| {s} | {v['nrmse']:.4g} | {v['offset_ratio']:.2f} |")
-    L += ["", "Worst time windows:", ""]
+    L += ["", "Worst segments:", ""]
     for w in d["mismatch"]["worst_windows"][:5]:
         L.append(f"- {w['recording']} {w['t_start']:.2f}-{w['t_end']:.2f} s, {w['signal']}: NRMSE {w['nrmse']:.3g}")
-    L += ["", "Regimes (inverse-dynamics residual RMS in regime / overall):", ""]
-    for j, t in d["mismatch"]["regimes"].items():
-        parts = [f"{k} {v['excess']}" for k, v in t.items() if v.get("excess") is not None]
-        L.append(f"- {j}: " + ", ".join(parts))
-    L += ["", "## Candidates", "",
-          "Screened by BIC on the inverse-dynamics equation error (dBIC < 0: better than `none`; held-out "
-          "ratio: equation-error RMSE on the held-back tail relative to `none`); the front-runners verified "
-          "by simulated predictions on that tail (NRMSE).", "",
-          "| effect | target | dBIC vs none | held-out ratio | BIC weight | verified NRMSE |", "|---|---|---|---|---|---|"]
+    L += ["", "## Candidates (first round)", "",
+          "Screen score: linearised drop of the training objective on top of the nominal re-fit; the best were "
+          "fitted and judged on the validation segments (ratio to the model before; lower is better).", "",
+          "| effect | target | screen score | validation ratio | t | named |", "|---|---|---|---|---|---|"]
     for r in d["effects"]:
-        v = r.get("verified_nrmse")
-        L.append(f"| {r['effect']} | {r['target']} | {r['score']:.1f} | {r['heldout_ratio']:.3f} | {r['weight']:.3f} | "
-                 f"{'' if v is None else f'{v:.4g}'} |")
+        L.append(f"| {r['effect']} | {r['target']} | {r['screen_score']:.4f} | {_fmt(r.get('validation_ratio'))} | "
+                 f"{_fmt(r.get('t'))} | {'yes' if r.get('passed') else ''} |")
     L.append("")
     for title, img in images.items():
         L += [f"## {title}", "", f"![{title}]({img})", ""]

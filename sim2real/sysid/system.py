@@ -1,8 +1,16 @@
 """A user's MJCF as the subject of identification: named parameters, native and MJX models.
 
-The parameter spec has the *nominal* parameters a model writer sets (body masses, joint damping,
-actuator gains) and every effect of the library on every joint, actuator and body, all neutral
-by default, so the nominal model is ``spec.default`` and a fitted model is another ``z``.
+The parameter spec has the *nominal* parameters a model writer sets (body masses, declared joint
+damping and friction loss, actuator gains) and every effect of the library on every joint,
+actuator and body, all neutral by default, so the nominal model is ``spec.default`` and a
+fitted model is another ``z``. The plant is the one the envs step (``PhysicsModel.apply`` +
+``Effects`` + ``stepper.advance``), at the recordings' sample period.
+
+What MJX cannot run as written is changed here, and said in ``notes``: the ``implicit`` and
+``RK4`` integrators (and Euler without implicit damping) run as ``implicitfast``, whose implicit
+damping the Coulomb model relies on; a declared ``frictionloss`` becomes the effects library's
+Coulomb level (a nominal parameter, re-fitted like the masses); the constraint solver is capped
+at 10 iterations.
 """
 from __future__ import annotations
 
@@ -26,63 +34,135 @@ def _names(m, obj, n):
     return [mujoco.mj_id2name(m, obj, i) for i in range(n)]
 
 
+_INTEGRATOR = {int(mujoco.mjtIntegrator.mjINT_EULER): "Euler", int(mujoco.mjtIntegrator.mjINT_RK4): "RK4",
+               int(mujoco.mjtIntegrator.mjINT_IMPLICIT): "implicit",
+               int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST): "implicitfast"}
+
+
+def check_model(m: mujoco.MjModel, xml_path: str) -> None:
+    """Refuse what the diagnosis cannot handle, naming the joint or actuator."""
+    jn = _names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt)
+    for j in range(m.njnt):
+        if int(m.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            raise ModelError(f"{xml_path}: joint '{jn[j]}' is not a hinge or slide; the diagnosis tool handles "
+                             "hinge/slide joints only")
+        if not jn[j]:
+            raise ModelError(f"{xml_path}: joint #{j} has no name; name every joint (recordings refer to them)")
+    for a in range(m.nu):
+        if m.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT:
+            raise ModelError(f"{xml_path}: actuator #{a} does not drive a joint directly (tendon/site "
+                             "transmissions are not supported)")
+        if not mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a):
+            raise ModelError(f"{xml_path}: actuator #{a} has no name; name every actuator")
+        if m.actuator_dyntype[a] in (mujoco.mjtDyn.mjDYN_MUSCLE, mujoco.mjtDyn.mjDYN_USER):
+            raise ModelError(f"{xml_path}: actuator #{a}: muscle/user dynamics are not supported")
+
+
+def _load(xml_path: str) -> mujoco.MjModel:
+    if not os.path.exists(xml_path):
+        raise ModelError(f"model file '{xml_path}' not found")
+    if os.path.isdir(xml_path):
+        raise ModelError(f"model '{xml_path}' is a folder, not an MJCF file")
+    try:
+        return mujoco.MjModel.from_xml_path(xml_path)
+    except Exception as e:  # mujoco raises ValueError with the parser's message
+        raise ModelError(f"{xml_path}: cannot compile the MJCF: {e}") from None
+
+
 class System:
-    """Static structure for identification of one MJCF.
+    """Static structure for identification of one MJCF at one sample period.
 
     Attributes:
-      mj: native model (with the saturation clamp structure, see ``PhysicsModel``).
+      mj: native model as the diagnosis simulates it (timestep ``h``, integrator MJX supports).
       spec: nominal + effect parameters.
       physics, effects: the MJX ``apply`` and the effects library for this model.
-      joints, actuators, bodies: names.
-      nominal: names of the nominal parameters a fit may re-estimate (masses and declared damping;
-        actuator gains too with ``refit_gains``, for systems whose gravity load anchors the scale).
+      joints, actuators, bodies: names (``bodies``: every body, index = body id).
+      nominal: names of the nominal parameters a fit re-estimates (masses, declared damping and
+        friction loss; actuator gains anchor the force scale and stay as declared).
+      substeps, h: physics steps per sample and their length (s).
+      notes: what was changed to simulate the model, in words.
     """
 
-    def __init__(self, xml_path: str, coulomb_eps: float = 1e-3, max_delay: int = 8, refit_gains: bool = False):
-        if not os.path.exists(xml_path):
-            raise ModelError(f"model file '{xml_path}' not found")
-        try:
-            m = mujoco.MjModel.from_xml_path(xml_path)
-        except Exception as e:  # mujoco raises ValueError with the parser's message
-            raise ModelError(f"{xml_path}: cannot compile the MJCF: {e}") from None
+    def __init__(self, xml_path: str, dt: float | None = None, coulomb_eps: float = 1e-3, max_delay: int = 8,
+                 refit_gains: bool = False, substeps: int | None = None):
+        m = _load(xml_path)
         self.xml_path = xml_path
-        for j in range(m.njnt):
-            if int(m.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
-                raise ModelError(f"{xml_path}: joint '{_names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt)[j]}' is not a "
-                                 "hinge or slide; the diagnosis tool handles hinge/slide joints only")
-        if m.nu == 0:
-            raise ModelError(f"{xml_path}: the model has no actuators; commands cannot be replayed")
-        for a in range(m.nu):
-            if m.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT:
-                raise ModelError(f"{xml_path}: actuator #{a} does not drive a joint directly")
-        self.joints = _names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt)
+        self.notes: list[str] = []
+        check_model(m, xml_path)
+        jn = _names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt)
+        self._adapt(m, dt, substeps)
+        self.joints = jn
         self.actuators = _names(m, mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu)
-        bodies = [b for b in range(1, m.nbody) if m.body_mass[b] > 0]
         self.bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody)
-        params: list[Param] = catalog.body_mass_params(m, bodies)
+        moving = [b for b in range(1, m.nbody) if m.body_mass[b] > 0 and self._moves(m, b)]
+        params: list[Param] = catalog.body_mass_params(m, moving)
+        declared_fl = {}
         for j in range(m.njnt):
             d = float(m.dof_damping[m.jnt_dofadr[j]])
+            unit = "N s/m" if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE else "Nm s/rad"
             if d > 0:  # declared damping is a nominal parameter; undeclared is an effect (viscous)
-                unit = "N s/m" if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE else "Nm s/rad"
-                params.append(Param(f"damping:{self.joints[j]}", d, 0.0, 100 * d + 1.0, unit,
+                params.append(Param(f"damping:{jn[j]}", d, 0.0, 100 * d + 1.0, unit,
                                     "declared joint damping", "dof_damping", j))
+            fl = float(m.dof_frictionloss[m.jnt_dofadr[j]])
+            if fl > 0:
+                declared_fl[j] = fl
         params += catalog.actuator_gain_params(m, range(m.nu))
-        params += catalog.effect_params(m, range(m.njnt), range(m.nu), bodies)
+        effect = catalog.effect_params(m, range(m.njnt), range(m.nu), moving)
+        for i, p in enumerate(effect):  # a declared frictionloss is the Coulomb model's nominal level
+            if p.kind == "coulomb" and p.index in declared_fl:
+                effect[i] = Param(p.name, round(declared_fl[p.index], 9), p.low, max(p.high, 100 * declared_fl[p.index]),
+                                  p.unit, "declared friction loss (Coulomb level)", "coulomb", p.index)
+        params += effect
+        params += catalog.payload_position_params(m, moving)
+        params += catalog.backlash_inertia_params(m, range(m.nu))
         params += catalog.common_params(m, max_delay)
+        if declared_fl:
+            m.dof_frictionloss[:] = 0.0
+            self.notes.append("declared frictionloss (" + ", ".join(f"{jn[j]} {v:g}" for j, v in declared_fl.items())
+                              + ") is simulated as the effects library's Coulomb friction and re-fitted")
         self.spec = ParamSpec(params)
         # Positions and commands alone identify forces only up to a common scale (scaling every
         # mass, damping and gain together leaves the motion unchanged), so something must anchor
         # the scale: the actuator gains (known from the drive's datasheet) by default.
         kinds = ("body_mass", "dof_damping") + (("actuator_gain", "actuator_kv") if refit_gains else ())
-        self.nominal = [p.name for p in params if p.kind in kinds]
+        self.nominal = [p.name for p in params if p.kind in kinds or
+                        (p.kind == "coulomb" and p.index in declared_fl)]
         self.physics = PhysicsModel(m, self.spec)
         self.mj = self.physics.mj
         self.effects = Effects(self.mj, self.spec, EffectsConfig(max_delay=max_delay, coulomb_eps=coulomb_eps))
         self.data0 = mjx.make_data(self.physics.mx)
 
-    @property
-    def rk4(self) -> bool:
-        return int(self.mj.opt.integrator) == int(mujoco.mjtIntegrator.mjINT_RK4)
+    def _adapt(self, m: mujoco.MjModel, dt: float | None, substeps: int | None = None) -> None:
+        """Integrator, timestep and solver settings MJX can run (``notes`` says what changed)."""
+        integ = _INTEGRATOR.get(int(m.opt.integrator), "?")
+        eulerdamp_off = bool(m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_EULERDAMP)
+        if integ in ("implicit", "RK4") or (integ == "Euler" and eulerdamp_off):
+            m.opt.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+            self.notes.append(f"the {integ} integrator{' without implicit damping' if eulerdamp_off else ''} is "
+                              "simulated as implicitfast (MJX supports it, and it treats damping -- and so the "
+                              "Coulomb friction model -- implicitly)")
+        self.h_model = float(m.opt.timestep)
+        self.substeps, self.h = 1, self.h_model
+        if dt is not None:
+            self.substeps = int(substeps) if substeps else max(1, int(round(dt / self.h_model)))
+            self.h = dt / self.substeps
+            if abs(self.h - self.h_model) > 0.01 * self.h_model:
+                self.notes.append(f"simulated at {self.h * 1e3:.4g} ms steps ({self.substeps} per sample of "
+                                  f"{dt * 1e3:.4g} ms) instead of the model's {self.h_model * 1e3:.4g} ms"
+                                  + (" (a finer step converged; the physics found does not depend on the step)"
+                                     if substeps else ""))
+            m.opt.timestep = self.h
+        if m.opt.iterations > 10 or m.opt.ls_iterations > 10:
+            m.opt.iterations, m.opt.ls_iterations = min(m.opt.iterations, 10), min(m.opt.ls_iterations, 10)
+
+    @staticmethod
+    def _moves(m: mujoco.MjModel, b: int) -> bool:
+        """The body or one of its ancestors has a joint."""
+        while b > 0:
+            if m.body_jntnum[b] > 0:
+                return True
+            b = int(m.body_parentid[b])
+        return False
 
     @property
     def nq(self) -> int:
@@ -93,6 +173,9 @@ class System:
 
     def declared_damping(self, joint: str) -> bool:
         return f"damping:{joint}" in self.spec
+
+    def declared_friction(self, joint: str) -> bool:
+        return f"coulomb:{joint}" in self.nominal
 
     def check_recording_covers(self, rec) -> None:
         """Every joint must be measured (the state is set from the data)."""
@@ -108,9 +191,10 @@ class System:
         self.check_recording_covers(rec)
         T = len(rec)
         qpos = np.stack([rec.get("qpos", j) for j in self.joints], -1)
-        ctrl = np.stack([rec.get("ctrl", a) for a in self.actuators], -1)
+        ctrl = (np.stack([rec.get("ctrl", a) for a in self.actuators], -1) if self.actuators
+                else np.zeros((T, 0)))
         force = None
-        if all(rec.get("force", a) is not None for a in self.actuators):
+        if self.actuators and all(rec.get("force", a) is not None for a in self.actuators):
             force = np.stack([rec.get("force", a) for a in self.actuators], -1)
         qfrc = np.zeros((T, self.mj.nv))
         for j, name in enumerate(self.joints):

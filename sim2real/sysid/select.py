@@ -1,0 +1,319 @@
+"""Name the missing physics: screen every candidate, fit the best, add effects while they hold up.
+
+Forward selection on the simulation error (``fit.py``):
+
+1. ``none``: the nominal parameters (masses, declared damping and friction) re-fitted.
+2. Screen: every candidate at every point of its grid is simulated once with the current
+   model's other parameters; the current parameters and segment velocities are then re-solved
+   *linearly* (the current model's Jacobian), and the effect's own magnitude too (the difference
+   between neighbouring grid points is its Jacobian column). The drop of the objective is the
+   candidate's score -- a Rao score test, in effect, that needs no fit per candidate.
+3. The ``top`` candidates by score are fitted in full (Gauss-Newton from their best grid point,
+   every parameter of the current model free), then judged on the *validation* segments (the
+   tail of every training recording, never fitted): each segment's prediction error, with its
+   initial velocity refined, for the current model and the candidate. A candidate passes when
+   the validation error falls by ``min_gain`` (relative) and the per-segment differences are
+   significant (paired t over the segments >= ``min_t``, ``Selector.judge``). The best passing one joins the model.
+4. Repeat from 2 until nothing passes (or ``max_effects``).
+
+A Coulomb friction that passes is then tried with a level per direction (``coulomb_asym``),
+kept by the same test. A fit whose effect parameter ends at the edge of its search range is
+widened once and fitted again.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from sim2real.sysid.candidates import Candidate
+from sim2real.sysid.fit import Fitter, Result
+
+# a validation segment's error is floored at this many residuals (each in units of its noise) in
+# the paired test (``Selector.judge``)
+KAPPA = 0.1
+
+
+@dataclasses.dataclass
+class Model:
+    """A fitted hypothesis: the nominal re-fit plus ``effects`` (in the order found)."""
+
+    effects: list           # [Candidate]
+    result: Result
+    val: np.ndarray         # per validation segment objective (velocities refined)
+    params: list            # every free parameter's name
+
+    @property
+    def z(self):
+        return self.result.z
+
+    @property
+    def label(self) -> str:
+        return " + ".join(c.label for c in self.effects) or "none"
+
+
+@dataclasses.dataclass
+class Trial:
+    """A candidate screened, fitted and judged against the model it would extend."""
+
+    candidate: Candidate
+    score: float            # screen: relative drop of the objective (linearised)
+    model: Model | None = None
+    val_ratio: float = float("nan")
+    t: float = float("nan")
+    passed: bool = False
+    base_level: float = float("nan")
+    note: str = ""
+
+
+@dataclasses.dataclass
+class SelectConfig:
+    """Thresholds of the selection, tuned on the tuning half of the independent benchmark and the
+    EMPS recordings only (``benchmarks/results/diagnosis_independent/tuning.md`` says how).
+
+    Attributes:
+      min_gain: a candidate must lower the validation error by this fraction ...
+      min_t: ... with a paired t-statistic over the validation segments at least this large ...
+      floor_level: ... and, unless its gain is ``strong``, the model it extends must misfit the
+        validation data by more than this: its validation objective per residual (residuals are
+        in units of each signal's noise, at least 1% of its spread). A model already within the
+        precision of the data has nothing left for an effect to explain.
+      strong: a validation ratio at or below this passes whatever the misfit level.
+      top: candidates fitted per round; max_effects: effects named at most;
+      min_score: candidates scoring less in the screen are not fitted; iters: Gauss-Newton steps.
+    """
+
+    min_gain: float = 0.05
+    min_t: float = 2.0
+    floor_level: float = 0.1
+    strong: float = 0.0
+    top: int = 4
+    max_effects: int = 3
+    min_score: float = 0.01
+    iters: int = 6
+
+
+def _paired_t(d: np.ndarray) -> float:
+    """One-sample t-statistic of the per-segment improvements ``d`` (inf/0 when they do not vary)."""
+    if len(d) < 3 or np.std(d) == 0:
+        return float("inf") if np.mean(d) > 0 else 0.0
+    return float(np.mean(d) / (np.std(d, ddof=1) / np.sqrt(len(d))))
+
+
+class Selector:
+    """Forward selection over ``candidates`` with ``fitter`` on the fit/validation segments."""
+
+    def __init__(self, fitter: Fitter, nominal: list[str], candidates: list[Candidate], cfg: SelectConfig,
+                 progress=None):
+        self.f, self.nominal, self.cands, self.cfg = fitter, list(nominal), list(candidates), cfg
+        sh = fitter.sh
+        self.fit_tiles, self.val_tiles = sh.tiles.of("fit"), sh.tiles.of("val")
+        self.spec = sh.sys.spec
+        self.progress = progress or (lambda text: None)
+        self.rounds: list[list[Trial]] = []
+
+    # ------------------------------------------------------------------------------------------
+    def _scales(self, effects) -> dict:
+        sc = {n: self.f.scales[n] for n in self.nominal}
+        for c in effects:
+            for n in c.params:
+                sc[n] = c.scale_of(n)
+        return sc
+
+    def fit(self, effects: list[Candidate], z0, v0, extra: tuple = ()) -> Model:
+        params = list(self.nominal) + [n for c in effects for n in c.params] + list(extra)
+        self.f.scales.update(self._scales(effects))
+        bounds = {n: r for c in effects for n, r in zip(c.params, c.search)}
+        res = self.f.fit(z0, v0, params, self.fit_tiles, iters=self.cfg.iters, bounds=bounds)
+        return Model(list(effects), res, None, params)
+
+    def validate(self, models: list[Model]) -> None:
+        """Each model's per-segment validation objective (velocities refined), simulated together."""
+        todo = [M for M in models if M.val is None]
+        if todo:
+            out = self.f.velocities_many([M.z for M in todo], [self.f.v_hat] * len(todo), self.val_tiles)
+            for M, (_, per) in zip(todo, out):
+                M.val = per
+
+    def none(self) -> Model:
+        M = self.fit([], self.spec.default.copy(), self.f.v_hat)
+        self.validate([M])
+        return M
+
+    # ------------------------------------------------------------------------------------------
+    def _lin_phi(self, r, J_t, J_v, v0, E=None, e_range=None, e_now=None):
+        """Linearised minimum of the objective from residual ``r`` when the current parameters,
+        the segment velocities and (``E [k, m, 1]``) the effect's magnitude move; returns
+        ``(phi, effect step)``. The effect stays inside ``e_range``."""
+        tiles = self.fit_tiles
+        phi0 = self.f.phi(r, v0, tiles)
+
+        def solve(Jt):
+            # quadratic model |r + J d|^2: its minimum is phi0 - (velocity part) - g' H^-1 g
+            H, g, _, v_gain = self.f._reduce(r, Jt, J_v, v0, tiles)
+            if not len(g):
+                return phi0 - v_gain, np.zeros(0)
+            w, V = np.linalg.eigh(0.5 * (H + H.T))
+            keep = w > 1e-9 * max(w.max(), 1e-30)
+            gv = V.T @ g
+            d = np.where(keep, -gv / np.maximum(w, 1e-300), 0.0)
+            return phi0 - v_gain + float(gv @ d), V @ d
+
+        if E is None:
+            return solve(J_t)[0], None
+        phi, d = solve(np.concatenate([J_t, E], -1))
+        de = d[-1]
+        if e_range is not None and not (e_range[0] <= e_now + de <= e_range[1]):
+            de = float(np.clip(e_now + de, *e_range) - e_now)
+            phi = solve(J_t)[0] if de == 0 else self._lin_phi(r + E[..., 0] * de, J_t, J_v, v0)[0]
+        return phi, de
+
+    def screen(self, M: Model, cands: list[Candidate]) -> list[Trial]:
+        """Score every candidate at the current model ``M`` (see the module docstring)."""
+        f, tiles = self.f, self.fit_tiles
+        r_M, J_t, J_v = f.jacobian(M.z, M.result.v0, M.params, tiles)
+        v0 = M.result.v0
+        base, _ = self._lin_phi(r_M, J_t, J_v, v0)
+        zs, owner = [], []
+        for ci, c in enumerate(cands):
+            for gi, g in enumerate(c.grid):
+                z = M.z.copy()
+                z[self.spec.indices(list(c.params))] = g
+                zs.append(z)
+                owner.append((ci, gi))
+        rs = f.residuals(np.stack(zs), np.repeat(v0[None], len(zs), 0), tiles) if zs else []
+        by = {}
+        for (ci, gi), r in zip(owner, rs):
+            by.setdefault(ci, {})[gi] = r
+        trials = []
+        for ci, c in enumerate(cands):
+            best = (np.inf, None)
+            grid = c.grid
+            for gi, g in enumerate(grid):
+                r = by[ci][gi]
+                E, rng, now = None, None, None
+                if len(c.params) == 1 and len(grid) > 1:  # the effect's column from the nearest grid point
+                    nb = gi + 1 if gi + 1 < len(grid) else gi - 1
+                    step = grid[nb][0] - g[0]
+                    if step != 0 and np.sign(grid[nb][0]) == np.sign(g[0] or grid[nb][0]):
+                        E = ((by[ci][nb] - r) / step)[..., None]
+                        # the linear model holds between the grid neighbours only: the start stays there
+                        lo_n = grid[max(gi - 1, 0)][0]
+                        hi_n = grid[min(gi + 1, len(grid) - 1)][0]
+                        rng = (max(min(lo_n, hi_n), c.search[0][0]), min(max(lo_n, hi_n), c.search[0][1]))
+                        now = g[0]
+                phi, de = self._lin_phi(r, J_t, J_v, v0, E, rng, now)
+                if phi < best[0]:
+                    start = list(g)
+                    if de is not None:
+                        start[0] = g[0] + de
+                    best = (phi, tuple(start))
+            score = (base - best[0]) / max(base, 1e-300)
+            t = Trial(c, float(score))
+            t.start = best[1]
+            trials.append(t)
+        trials.sort(key=lambda t: -t.score)
+        return trials
+
+    # ------------------------------------------------------------------------------------------
+    def judge(self, M: Model, C: Model) -> tuple[float, float]:
+        """``(validation ratio C / M, t)``: ``t`` is the larger of two paired t-statistics over the
+        validation segments, of the errors' differences and of their log-ratios.
+
+        The differences are dominated by the segments the current model misses most -- an effect
+        that fixes those consistently is real even if it costs a little where nothing was wrong
+        (EMPS: Coulomb friction is worse on the one segment at rest). The log-ratios weigh every
+        segment alike and catch an effect that helps consistently everywhere by modest amounts;
+        ``KAPPA`` residuals' worth of noise is added to both errors so that a segment already
+        within the data's precision cannot vote with the ratio of two tiny numbers.
+        """
+        a, b = np.asarray(M.val), np.asarray(C.val)
+        ratio = float(np.sum(b) / max(np.sum(a), 1e-300))
+        floor = KAPPA * max(M.result.n / max(len(self.fit_tiles), 1), 1.0)
+        return ratio, max(_paired_t(a - b), _paired_t(np.log((a + floor) / (b + floor))))
+
+    def level(self, M: Model) -> float:
+        """Validation objective of ``M`` per residual (1: the model misfits by the data's precision)."""
+        n = max(M.result.n / max(len(self.fit_tiles), 1), 1) * len(self.val_tiles)
+        return float(np.sum(M.val) / n)
+
+    def _passes(self, ratio, t, level=float("inf")) -> bool:
+        c = self.cfg
+        return ratio <= 1 - c.min_gain and t >= c.min_t and (level > c.floor_level or ratio <= c.strong)
+
+    def _try(self, M: Model, trial: Trial) -> Trial:
+        """Fit the candidate on top of ``M`` (validation comes later, batched: ``_judge_all``)."""
+        c = trial.candidate
+        z0 = M.z.copy()
+        z0[self.spec.indices(list(c.params))] = np.clip(trial.start, [r[0] for r in c.search], [r[1] for r in c.search])
+        C = self.fit(M.effects + [c], z0, M.result.v0)
+        # a fit that ends at the edge of the searched range: widen once and fit again
+        v = float(C.z[self.spec.index(c.params[0])])
+        lo, hi = c.search[0]
+        edge = (c.effect in ("motor_lag", "action_delay", "backlash") and v >= 0.98 * hi) or (
+            c.effect == "actuator_saturation" and v <= 1.02 * lo)
+        if edge:
+            wide = c.widen()
+            z1 = C.z.copy()
+            C2 = self.fit(M.effects + [wide], z1, C.result.v0)
+            trial.note = f"{c.params[0]} ended at the edge of its range ({v:.4g}); searched wider"
+            if C2.result.phi < C.result.phi:
+                C, trial.candidate = C2, wide
+            v2 = float(C.z[self.spec.index(trial.candidate.params[0])])
+            lo2, hi2 = trial.candidate.search[0]
+            if (trial.candidate.effect != "actuator_saturation" and v2 >= 0.98 * hi2) or (
+                    trial.candidate.effect == "actuator_saturation" and v2 <= 1.02 * lo2):
+                trial.note += f"; still at the edge after widening ({v2:.4g}): the value is a bound, not an estimate"
+        trial.model = C
+        return trial
+
+    def _judge_all(self, M: Model, trials: list[Trial]) -> None:
+        self.validate([t.model for t in trials])
+        level = self.level(M)
+        for t in trials:
+            t.val_ratio, t.t = self.judge(M, t.model)
+            t.base_level = level
+            t.passed = self._passes(t.val_ratio, t.t, level) and t.model.result.phi < M.result.phi
+
+    def _asymmetry(self, M: Model, trial: Trial) -> Trial:
+        """Coulomb friction with a level per direction, kept if it passes against the symmetric fit."""
+        c = trial.candidate
+        jn = c.target
+        name = f"coulomb_asym:{jn}"
+        asym = dataclasses.replace(c, params=c.params + (name,), grid=(c.grid[0] + (0.0,),),
+                                   scales=c.scales + (0.3,), search=c.search + ((-0.95, 0.95),))
+        C = self.fit(M.effects + [asym], trial.model.z, trial.model.result.v0)
+        self.validate([C])
+        ratio, t = self.judge(trial.model, C)
+        if self._passes(ratio, t, self.level(trial.model)):
+            base_ratio, base_t = self.judge(M, C)
+            return dataclasses.replace(trial, candidate=asym, model=C, val_ratio=base_ratio, t=base_t,
+                                       note=(trial.note + "; " if trial.note else "") +
+                                       f"a level per direction: validation error {ratio:.3f} of the symmetric fit's")
+        return trial
+
+    def run(self) -> tuple[Model, list[Model]]:
+        """Forward selection; returns the final model and the models after each step (``none`` first)."""
+        self.progress("re-fitting the nominal parameters (none)")
+        M = self.none()
+        steps = [M]
+        remaining = list(self.cands)
+        while len(M.effects) < self.cfg.max_effects and remaining:
+            self.progress(f"screening {len(remaining)} candidates on top of {M.label}")
+            trials = self.screen(M, remaining)
+            tried = []
+            for tr in [t for t in trials if t.score >= self.cfg.min_score][: self.cfg.top]:
+                self.progress(f"fitting {tr.candidate.label} on top of {M.label}")
+                tried.append(self._try(M, tr))
+            self._judge_all(M, tried)
+            self.rounds.append(trials)
+            passed = [t for t in tried if t.passed]
+            if not passed:
+                break
+            best = min(passed, key=lambda t: np.sum(t.model.val))
+            if best.candidate.effect == "coulomb_friction":
+                best = self._asymmetry(M, best)
+            M = best.model
+            steps.append(M)
+            remaining = [c for c in remaining if c.label != best.candidate.label]
+        return M, steps

@@ -1,0 +1,304 @@
+"""Batched multiple-shooting predictions: every segment of every recording, for 8 physics at once.
+
+Each recording is cut into consecutive segments of ``H`` samples. A segment starts from the
+measured positions and an initial velocity (the data's estimate, refined per segment by the
+fits) and is simulated through the recorded commands; its prediction of the next ``H`` samples
+is compared with the measurements. Segments stay meaningful where a whole-recording replay
+drifts (unstable or chaotic systems), and their errors are nearly independent of each other.
+
+The command path (delay line, motor lag, backlash gap, MuJoCo's own actuator activations) has
+memory longer than a segment, so its state at every segment start comes from running it over
+each recording from its start (``_command_states``: no physics, one scan), which begins at
+rest under the recording's first command; the segments themselves are simulated in parallel. One jitted function serves every call of a diagnosis:
+``predict(zs [8, P], v0 [8, S, nv], tiles [Sc])`` -- the batch of 8 physics vectors is a fixed
+shape, as is the number of segments per call, so it compiles once per model and sample rate.
+
+Initial activations: an integrating servo (``intvelocity``) starts at the joint's measured
+position, a filter at the first command (the system at rest); the diagnosis says so.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+
+from sim2real.physics import stepper
+from sim2real.physics.params import clip
+from sim2real.sysid.derivatives import velocity_state
+
+B = 8  # physics vectors per call
+
+
+@dataclasses.dataclass
+class Tiles:
+    """Segments of all recordings (consecutive within each recording).
+
+    Attributes:
+      start: ``[S]`` global index of each segment's first sample (recordings concatenated).
+      traj: ``[S]`` which trajectory; first: ``[S]`` bool, first segment of its recording.
+      label: ``[S]`` "fit" | "val" | "heldout" | "" (a segment straddling the fit/val boundary) |
+        "edge" (starting within half a smoothing window of the recording's start).
+    """
+
+    start: np.ndarray
+    traj: np.ndarray
+    first: np.ndarray
+    label: np.ndarray
+
+    def of(self, label: str) -> np.ndarray:
+        return np.where(self.label == label)[0]
+
+
+class Shooting:
+    """Multiple-shooting predictor for ``system`` over ``trajs`` with segments of ``horizon`` samples.
+
+    Args:
+      system: ``sysid.system.System`` (its timestep already set to the sample period's sub-step).
+      trajs: trajectories, all at one sample period.
+      heldout: indices of ``trajs`` that are held out (their segments are labelled "heldout").
+      val_fraction: tail of every other trajectory whose segments are labelled "val".
+      floor: each signal's weight is ``1 / (noise^2 + (floor * its std)^2)``: a signal
+        measured with almost no noise still does not outweigh every other one.
+      budget: physics steps per physics vector that one call of the fit segments may cost; when
+        the recordings hold more, evenly spaced segments are used (validation and held-out sets:
+        2/3 of it). What a diagnosis costs then depends on the model, not on the recordings' length.
+    """
+
+    def __init__(self, system, trajs, horizon: int, heldout=(), val_fraction: float = 0.3,
+                 floor: float = 0.01, batch: int = B, budget: int = 6000):
+        self.sys, self.trajs, self.H = system, trajs, int(horizon)
+        self.B = int(batch)
+        m = system.mj
+        self.dt = trajs[0].dt
+        self.n = system.substeps
+        H = self.H
+        starts, traj, first, label, offset = [], [], [], [], 0
+        for r, tr in enumerate(trajs):
+            T = len(tr)
+            boundary = int(T * (1 - val_fraction))
+            for k, s in enumerate(range(0, T - H, H)):
+                starts.append(offset + s)
+                traj.append(r)
+                first.append(k == 0)
+                if s < tr.window // 2 + 1:
+                    # the smoothing window reaches past the recording's start: its velocity is an
+                    # extrapolation, not an estimate (the command path still runs from sample 0)
+                    label.append("edge")
+                elif r in heldout:
+                    label.append("heldout")
+                elif s + H <= boundary:
+                    label.append("fit")
+                elif s >= boundary:
+                    label.append("val")
+                else:
+                    label.append("")
+            offset += T
+        if not starts:
+            raise ValueError(f"recordings shorter than one prediction horizon ({H} samples)")
+        label = np.array(label, dtype=object)
+        per_tile = H * system.substeps
+        for name, share in (("fit", 1.0), ("val", 2 / 3), ("heldout", 2 / 3)):
+            idx = np.where(label == name)[0]
+            cap = max(4, int(budget * share // per_tile))
+            if len(idx) > cap:  # keep evenly spaced segments, mark the rest unused
+                keep = idx[np.round(np.linspace(0, len(idx) - 1, cap)).astype(int)]
+                label[np.setdiff1d(idx, keep)] = name + "-unused"
+        self.tiles = Tiles(np.array(starts), np.array(traj), np.array(first), label.astype(str))
+        S = len(starts)
+        self.Sc = max(len(self.tiles.of(x)) for x in ("fit", "val", "heldout"))
+        cat = lambda f: np.concatenate([f(tr) for tr in trajs])  # noqa: E731
+        q_all = cat(lambda tr: tr.q)
+        self.q_all = q_all
+        # measured targets of every segment: samples start+1 .. start+H
+        idx = self.tiles.start[:, None] + 1 + np.arange(H)[None]
+        self.signals = {"qpos": q_all[idx]}
+        sig_q = np.stack([tr.sigma_q for tr in trajs]).max(0)
+        scale = {"qpos": np.sqrt(sig_q**2 + (floor * q_all.std(0)) ** 2)}
+        if all(tr.qvel is not None for tr in trajs):
+            qv = cat(lambda tr: tr.qvel)
+            self.signals["qvel"] = qv[idx]
+            s_v = np.stack([tr.sigma_qvel for tr in trajs]).max(0)
+            scale["qvel"] = np.sqrt(s_v**2 + (floor * qv.std(0)) ** 2)
+        if m.nu and all(tr.force is not None for tr in trajs):
+            fo = cat(lambda tr: tr.force)
+            self.signals["force"] = fo[idx]
+            s_f = np.stack([tr.sigma_force for tr in trajs]).max(0)
+            scale["force"] = np.sqrt(s_f**2 + (floor * fo.std(0)) ** 2)
+        self.scale = {k: np.maximum(v, 1e-12) for k, v in scale.items()}
+        # the measured state at every segment start
+        st = self.tiles.start
+        self.q0 = q_all[st]
+        self.v0 = velocity_state(cat(lambda tr: tr.v)[st], cat(lambda tr: tr.a)[st], system.h)
+        self.sigma_v = np.stack([tr.sigma_v for tr in trajs]).max(0) * 1.5 + 1e-9 * (np.abs(self.v0).max(0) + 1)
+        # inputs of the jitted function (device arrays, passed as arguments, not baked in)
+        act0 = np.zeros((len(trajs), m.na))
+        for r, tr in enumerate(trajs):
+            act0[r] = self._initial_activation(tr)
+        self._data = dict(
+            ctrl=jnp.asarray(cat(lambda tr: tr.ctrl), jnp.float32),
+            qfrc=jnp.asarray(cat(lambda tr: tr.qfrc), jnp.float32),
+            q=jnp.asarray(q_all, jnp.float32),
+            start=jnp.asarray(st, jnp.int32), first=jnp.asarray(self.tiles.first),
+            act0=jnp.asarray(act0[self.tiles.traj], jnp.float32), q0=jnp.asarray(self.q0, jnp.float32))
+        self._fn = jax.jit(self._predict_batch)
+        self.calls = 0
+        self.seconds = 0.0
+        self.S = S
+
+    # ------------------------------------------------------------------------------------------
+    def _initial_activation(self, tr) -> np.ndarray:
+        m = self.sys.mj
+        act = np.zeros(m.na)
+        for a in range(m.nu):
+            adr = m.actuator_actadr[a]
+            if adr < 0:
+                continue
+            if m.actuator_dyntype[a] == mujoco.mjtDyn.mjDYN_INTEGRATOR:
+                # an integrating servo holds its joint where it starts
+                j = m.actuator_trnid[a, 0]
+                act[adr] = m.actuator_gear[a, 0] * tr.q[0, m.jnt_qposadr[j]] if m.actuator_biasprm[a, 1] != 0 else 0.0
+            else:  # filters: at rest under the first command
+                act[adr] = tr.ctrl[0, a]
+        return act
+
+    def _act_step(self, act, u, h):
+        """MuJoCo's activation dynamics for one step of length ``h`` (Euler; exact for filterexact)."""
+        m = self.sys.mj
+        out = act
+        for a in range(m.nu):
+            adr = int(m.actuator_actadr[a])
+            if adr < 0:
+                continue
+            dyn, tau = int(m.actuator_dyntype[a]), float(m.actuator_dynprm[a, 0])
+            x = act[adr]
+            if dyn == int(mujoco.mjtDyn.mjDYN_INTEGRATOR):
+                x = x + h * u[a]
+            elif dyn == int(mujoco.mjtDyn.mjDYN_FILTEREXACT):
+                x = x + (u[a] - x) * (1 - np.exp(-h / max(tau, 1e-9)))
+            else:  # mjDYN_FILTER
+                x = x + h * (u[a] - x) / max(tau, 1e-9)
+            if m.actuator_actlimited[a]:
+                x = jnp.clip(x, m.actuator_actrange[a, 0], m.actuator_actrange[a, 1])
+            out = out.at[adr].set(x)
+        return out
+
+    def _command_states(self, z, data):
+        """Effect state and activations at every segment start ``([S] pytree, [S, na])``."""
+        sys, n, H = self.sys, self.n, self.H
+        fx = sys.effects
+        h = sys.h
+        es_init = fx.init_state()
+
+        def segment(carry, s):
+            es, act = carry
+            # a recording starts with its command path at rest under its first command
+            rest = fx.steady_state(data["ctrl"][data["start"][s]])
+            es = jax.tree_util.tree_map(lambda a, b: jnp.where(data["first"][s], b, a), es, rest)
+            act = jnp.where(data["first"][s], data["act0"][s], act)
+            out = (es, act)
+
+            def sample(c, k):
+                es, act = c
+                t = data["start"][s] + k
+                es = fx.push(es, data["ctrl"][t])
+                qt = fx.unsense(z, data["q"][t])
+
+                def sub(c2, j):
+                    es, act = c2
+                    u, es = fx.actuate(z, es, j, n, qt, h)
+                    return (es, self._act_step(act, u, h)), None
+
+                return jax.lax.scan(sub, (es, act), jnp.arange(n))[0], None
+
+            return jax.lax.scan(sample, (es, act), jnp.arange(H))[0], out
+
+        na = sys.mj.na
+        init = (es_init, jnp.zeros(na))
+        return jax.lax.scan(segment, init, jnp.arange(self.S))[1]
+
+    def _segment(self, z, model, data, q0, v0, es, act, s):
+        sys = self.sys
+        fx = sys.effects
+        d = sys.data0.replace(qpos=fx.unsense(z, q0), qvel=v0)
+        if sys.mj.na:
+            d = d.replace(act=act)
+        start = data["start"][s]
+        u = jax.lax.dynamic_slice_in_dim(data["ctrl"], start, self.H)
+        f = jax.lax.dynamic_slice_in_dim(data["qfrc"], start, self.H)
+
+        def step(carry, x):
+            d, es, alive = carry
+            uk, fk = x
+            d2, es2 = stepper.advance(fx, model, z, d, es, uk, self.dt, self.n, fk)
+            ok = alive & jnp.isfinite(d2.qpos).all() & jnp.isfinite(d2.qvel).all() & (jnp.abs(d2.qvel) < 1e6).all()
+            d2 = jax.tree_util.tree_map(lambda a, b: jnp.where(ok, a, b), d2, d)
+            out = {"qpos": fx.measure(z, d2.qpos), "qvel": d2.qvel, "force": d2.actuator_force, "ok": ok}
+            return (d2, es2, ok), out
+
+        return jax.lax.scan(step, (d, es, jnp.ones((), bool)), (u, f))[1]
+
+    def _predict_one(self, z, v0, tiles, data, es_all, act_all):
+        model = self.sys.physics.apply(z)
+        take = lambda x: x[tiles]  # noqa: E731
+        return jax.vmap(lambda q0, v, es, act, s: self._segment(z, model, data, q0, v, es, act, s))(
+            data["q0"][tiles], v0[tiles], jax.tree_util.tree_map(take, es_all), act_all[tiles], tiles)
+
+    def _predict_batch(self, zs, v0, tiles, data):
+        sys = self.sys
+        fx = sys.effects
+        zs = jax.vmap(lambda z: clip(sys.spec, z))(zs)
+        rows = [r for r in (fx.r_delay,) if r >= 0] + [int(r) for r in np.concatenate([fx.r_lag, fx.r_backlash]) if r >= 0]
+        # the command path's memory matters only when some physics in the batch has a delay, lag or
+        # backlash (or the model has activations); otherwise its states are the initial ones
+        needed = jnp.any(zs[:, np.array(rows, np.int32)] > 0) if rows else jnp.zeros((), bool)
+        if sys.mj.na:
+            needed = jnp.ones((), bool)
+
+        def run(_):
+            return jax.vmap(lambda z: self._command_states(z, data))(zs)
+
+        def rest(_):  # no delay, lag or backlash anywhere: the state is the command itself (no memory)
+            es = jax.vmap(lambda s: fx.steady_state(data["ctrl"][data["start"][s]]))(jnp.arange(self.S))
+            es = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (self.B,) + x.shape), es)
+            return es, jnp.zeros((self.B, self.S, sys.mj.na))
+
+        es_all, act_all = jax.lax.cond(needed, run, rest, None)
+        return jax.vmap(lambda z, v, es, act: self._predict_one(z, v, tiles, data, es, act))(zs, v0, es_all, act_all)
+
+    # ------------------------------------------------------------------------------------------
+    def predict(self, zs: np.ndarray, v0: np.ndarray, tiles: np.ndarray) -> dict[str, np.ndarray]:
+        """Predictions for ``zs [b, P]`` (b <= 8), initial velocities ``v0 [b, S, nv]``, segments
+        ``tiles [k]``; returns arrays ``[b, k, H, .]`` (``ok [b, k, H]``)."""
+        b, k = len(zs), len(tiles)
+        if b > self.B:
+            raise ValueError(f"at most {self.B} physics per call")
+        zpad = np.concatenate([zs, np.repeat(zs[:1], self.B - b, 0)]).astype(np.float32)
+        vpad = np.concatenate([v0, np.repeat(v0[:1], self.B - b, 0)]).astype(np.float32)
+        out = {}
+        import time
+
+        t0 = time.perf_counter()
+        for c0 in range(0, k, self.Sc):
+            t = np.asarray(tiles[c0: c0 + self.Sc])
+            tpad = np.concatenate([t, np.full(self.Sc - len(t), t[0])]).astype(np.int32)
+            res = self._fn(jnp.asarray(zpad), jnp.asarray(vpad), jnp.asarray(tpad), self._data)
+            self.calls += 1
+            for key, val in res.items():
+                out.setdefault(key, []).append(np.asarray(val)[:b, : len(t)])
+        self.seconds += time.perf_counter() - t0
+        return {key: np.concatenate(v, axis=1) for key, v in out.items()}
+
+    def residuals(self, pred: dict, tiles: np.ndarray) -> np.ndarray:
+        """Weighted residuals ``[b, k, H * n_signals]`` (prediction minus measurement over the
+        signal's noise scale); a diverged step counts as 1e3 per element."""
+        parts = []
+        for key, meas in self.signals.items():
+            e = (pred[key] - meas[tiles][None]) / self.scale[key]
+            parts.append(e.reshape(e.shape[:3] + (-1,)))
+        r = np.concatenate(parts, -1)
+        bad = ~pred["ok"][..., None] | ~np.isfinite(r)
+        r = np.where(bad, 1e3, r)
+        return r.reshape(r.shape[0], r.shape[1], -1)

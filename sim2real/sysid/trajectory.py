@@ -1,0 +1,133 @@
+"""A validated recording in the model's terms: model-order arrays, noise levels, velocity estimates.
+
+``Recording`` (``recordings.py``) is a file read and checked; a ``Trajectory`` is what every
+consumer works on -- multiple-shooting predictions, inverse dynamics, SimOpt's real rollouts --
+built once:
+
+* positions ``q [T, nq]`` in model order, time from the recording's first sample;
+* the noise of every measured signal, estimated from the data (the residual of a local cubic
+  fit over 7 samples, robust to outliers; a quantised encoder's step when the signal moves in
+  steps);
+* the smoothing window chosen from the data: the widest Savitzky-Golay window (cubic) whose
+  residual is still what the noise explains (wider would cut into the motion);
+* velocities: the smoothed derivative of the positions, combined with a measured ``qvel``
+  column (smoothed the same way) by inverse-variance weights, so a measured velocity counts
+  as much as its noise allows; ``sigma_v`` is the resulting standard error.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.signal import savgol_coeffs, savgol_filter
+
+
+@dataclasses.dataclass
+class Trajectory:
+    """One recording as arrays ``[T, .]`` at its sample period ``dt`` (s).
+
+    Attributes:
+      name, path: the recording's.
+      time: ``[T]`` seconds from the first sample.
+      q: ``[T, nq]`` measured positions (m | rad), as measured (sensor offsets included).
+      v: ``[T, nv]`` velocity estimate (m/s | rad/s); ``a``: acceleration ``[T, nv]`` (smoothed).
+      ctrl: ``[T, nu]`` commands; ``qfrc``: ``[T, nv]`` known external forces (0 where none).
+      force: ``[T, nu]`` measured actuator force, or None; ``qvel``: ``[T, nv]`` measured, or None.
+      sigma_q, sigma_v: ``[nq]``, ``[nv]`` noise std of ``q`` and standard error of ``v``.
+      sigma_qvel, sigma_force: noise of the measured ``qvel`` / ``force`` columns (None if absent).
+      window: Savitzky-Golay window (samples) used for ``v`` and ``a``.
+    """
+
+    name: str
+    path: str
+    dt: float
+    time: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    ctrl: np.ndarray
+    qfrc: np.ndarray
+    force: np.ndarray | None
+    qvel: np.ndarray | None
+    sigma_q: np.ndarray
+    sigma_v: np.ndarray
+    sigma_qvel: np.ndarray | None
+    sigma_force: np.ndarray | None
+    window: int
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+
+def noise_std(x: np.ndarray) -> np.ndarray:
+    """Per column of ``x [T, n]``: the std of white measurement noise on a smooth signal.
+
+    The residual of a local cubic fit over 7 samples leaves the noise (times sqrt(1 - 7/21)) and
+    almost none of a smooth signal; its median absolute deviation ignores outliers. A signal
+    that moves in steps (an encoder) is quantised: its noise is the step / sqrt(12).
+    """
+    x = np.asarray(x, float)
+    if len(x) < 9:
+        return np.zeros(x.shape[1])
+    res = x - savgol_filter(x, 7, 3, axis=0, mode="interp")
+    mad = 1.4826 * np.median(np.abs(res - np.median(res, 0)), 0) / np.sqrt(1 - 7 / 21)
+    out = np.empty(x.shape[1])
+    for k in range(x.shape[1]):
+        steps = np.abs(np.diff(x[:, k]))
+        steps = steps[steps > 0]
+        q = 0.0
+        if len(steps) and np.mean(np.diff(x[:, k]) == 0) > 0.2:  # often still: a quantised signal
+            q = float(np.min(steps)) / np.sqrt(12)
+        out[k] = max(mad[k], q, 1e-12 * (np.ptp(x[:, k]) + 1e-12))
+    return out
+
+
+def choose_window(x: np.ndarray, sigma: np.ndarray, dt: float, max_seconds: float = 0.25) -> int:
+    """The widest odd Savitzky-Golay window (cubic, >= 7 samples) whose residual on every column
+    of ``x [T, n]`` stays within 1.3 times what the noise ``sigma [n]`` alone leaves."""
+    best = 7
+    limit = max(7, min(int(max_seconds / dt), len(x) // 4))
+    for w in range(7, limit + 1, 2):
+        c0 = savgol_coeffs(w, 3)[w // 2]
+        expected = sigma * np.sqrt(max(1.0 - c0, 1e-6))
+        res = np.sqrt(np.mean((x - savgol_filter(x, w, 3, axis=0, mode="interp")) ** 2, 0))
+        if np.all(res <= 1.3 * expected + 1e-15):
+            best = w
+        else:
+            break
+    return best
+
+
+def _smooth(x, w, dt, deriv):
+    return savgol_filter(x, w, 3, deriv=deriv, delta=dt, axis=0, mode="interp")
+
+
+def from_recording(rec, system, window: int | None = None) -> Trajectory:
+    """Build the trajectory of ``rec`` for ``system`` (a ``sysid.system.System``).
+
+    ``window``: Savitzky-Golay window in samples (default: chosen from the data).
+    """
+    qpos, ctrl, force, qfrc = system.arrays(rec)
+    dt = rec.dt
+    sigma_q = noise_std(qpos)
+    w = window or choose_window(qpos, sigma_q, dt)
+    w = min(w, len(qpos) - (1 - len(qpos) % 2))
+    v = _smooth(qpos, w, dt, 1)
+    a = _smooth(qpos, w, dt, 2)
+    d1 = savgol_coeffs(w, 3, deriv=1, delta=dt)
+    sigma_v = sigma_q * np.sqrt(np.sum(d1**2))
+    qvel = None
+    sigma_qvel = None
+    if all(rec.get("qvel", j) is not None for j in system.joints):
+        qvel = np.stack([rec.get("qvel", j) for j in system.joints], -1)
+        sigma_qvel = noise_std(qvel)
+        wv = choose_window(qvel, sigma_qvel, dt)
+        vm = _smooth(qvel, wv, dt, 0)
+        s_m = sigma_qvel * np.sqrt(np.sum(savgol_coeffs(wv, 3) ** 2))
+        # inverse-variance combination of the two estimates (smoothing bias ignored)
+        wq, wm = 1 / np.maximum(sigma_v, 1e-12) ** 2, 1 / np.maximum(s_m, 1e-12) ** 2
+        v = (wq * v + wm * vm) / (wq + wm)
+        sigma_v = 1 / np.sqrt(wq + wm)
+    sigma_force = noise_std(force) if force is not None else None
+    return Trajectory(rec.name, rec.path, dt, rec.time - rec.time[0], qpos, v, a, ctrl, qfrc, force, qvel,
+                      sigma_q, sigma_v, sigma_qvel, sigma_force, int(w))
