@@ -110,19 +110,18 @@ def run_case(case: Case, work: str) -> dict:
     t0 = time.time()
     d = diagnose(DiagnoseConfig(model=xml, recordings=(train,), heldout=(held,), out=os.path.join(work, tag),
                                 overwrite=True, plots=False, progress=False))
-    sel = d["effects"][0]
+    sel = d["selected"][0] if d["selected"] else {"effect": "none", "target": "", "params": {}}
     return {"case": case.label, "system": case.system, "true_effect": case.effect, "true_target": case.target,
             "truth": ";".join(f"{k}={v:g}" for k, v in truth.items()),
             "named_effect": sel["effect"], "named_target": sel["target"],
             "named_params": ";".join(f"{k}={v:.4g}" for k, v in sel["params"].items()),
-            "confidence": round(d["confidence"], 3),
-            "runner_up": d["effects"][1]["effect"] if len(d["effects"]) > 1 else "",
+            "also_named": " + ".join(f"{s['effect']}@{s['target']}" for s in d["selected"][1:]),
+            "answer": d["answer"],
             "heldout_before": round(d["fit"]["before"], 5), "heldout_after": round(d["fit"]["after"], 5),
-            # every candidate: BIC score against none, simulated (verified) prediction error
-            "candidates": " ".join(f"{e['effect']}@{e['target']}:{e['score']:.1f}:{e['verified_nrmse'] or float('nan'):.4g}"
+            # first round: every candidate's screen score, and the fitted ones' validation ratio
+            "candidates": " ".join(f"{e['effect']}@{e['target']}:{e['screen_score']:.3f}:{e.get('validation_ratio', float('nan')):.3g}"
                                    for e in d["effects"]),
-            "correct": _matches(case, sel),
-            # the true effect was among those the diagnosis called indistinguishable from its pick
+            "correct": _matches(case, sel) and len(d["selected"]) <= 1,
             "truth_tied": not _matches(case, sel) and any(_matches(case, r) for r in d["indistinguishable"]),
             "seconds": round(time.time() - t0, 1)}
 

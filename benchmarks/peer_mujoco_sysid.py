@@ -71,6 +71,13 @@ def native_nrmse(model: mujoco.MjModel, trajs, segs, H, substeps) -> float:
     return float(np.mean(np.sqrt(np.mean(e[ok] ** 2, 0)) / (y.std(0) + 1e-12)))
 
 
+def _set_first(obj, attr: str, value: float) -> None:
+    """Set the first coefficient of a joint's ``damping`` / ``stiffness`` (MuJoCo 4 keeps 3)."""
+    v = np.array(getattr(obj, attr), float).ravel()
+    v[0] = value
+    setattr(obj, attr, v)
+
+
 def _with_sensors(spec: mujoco.MjSpec) -> mujoco.MjSpec:
     for j in spec.joints:
         spec.add_sensor(name=f"{j.name}_pos", type=mujoco.mjtSensor.mjSENS_JOINTPOS, objtype=mujoco.mjtObj.mjOBJ_JOINT,
@@ -107,7 +114,7 @@ def fit_with_mujoco_sysid(xml: str, effect: tuple, trajs_train, H: int, substeps
         jn = mujoco.mj_id2name(m0, mujoco.mjtObj.mjOBJ_JOINT, j)
         if dmp > 0 and effect[0] != "viscous_damping":
             params.add(sysid.Parameter(f"damping:{jn}", dmp, 0.0, 100 * dmp + 1,
-                                       modifier=lambda sp, p, jn=jn: setattr(sp.joint(jn), "damping", [float(p.value[0])])))
+                                       modifier=lambda sp, p, jn=jn: _set_first(sp.joint(jn), "damping", float(p.value[0]))))
     kind, target = effect
     if kind == "coulomb_friction":
         params.add(sysid.Parameter(f"frictionloss:{target}", 1e-3, 0.0, 1e3,
@@ -115,10 +122,10 @@ def fit_with_mujoco_sysid(xml: str, effect: tuple, trajs_train, H: int, substeps
     elif kind == "viscous_damping":
         base = float(m0.dof_damping[m0.jnt_dofadr[mujoco.mj_name2id(m0, mujoco.mjtObj.mjOBJ_JOINT, target)]])
         params.add(sysid.Parameter(f"damping:{target}", base + 1e-3, 0.0, 1e3,
-                                   modifier=lambda sp, p: setattr(sp.joint(target), "damping", [float(p.value[0])])))
+                                   modifier=lambda sp, p: _set_first(sp.joint(target), "damping", float(p.value[0]))))
     elif kind == "joint_stiffness":
         params.add(sysid.Parameter(f"stiffness:{target}", 1e-3, 0.0, 1e6,
-                                   modifier=lambda sp, p: setattr(sp.joint(target), "stiffness", [float(p.value[0])])))
+                                   modifier=lambda sp, p: _set_first(sp.joint(target), "stiffness", float(p.value[0]))))
     elif kind == "actuator_saturation":
         a = mujoco.mj_name2id(m0, mujoco.mjtObj.mjOBJ_ACTUATOR, target)
         top = float(np.max(np.abs(m0.actuator_ctrlrange[a]))) * 10
