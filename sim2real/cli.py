@@ -56,8 +56,20 @@ def stop_on_signal():
             signal.signal(s, h)
 
 
+_TERMINATED = False
+
+
 def _terminate_as_interrupt(signum, frame):
+    global _TERMINATED
+    _TERMINATED = True
     raise KeyboardInterrupt
+
+
+def raise_if_terminated() -> None:
+    """A safe point: re-raise a SIGTERM whose KeyboardInterrupt was swallowed where it landed
+    (a JAX garbage-collection callback prints "Exception ignored" and carries on)."""
+    if _TERMINATED:
+        raise KeyboardInterrupt
 
 
 def main_guard(fn, argv):
@@ -69,6 +81,8 @@ def main_guard(fn, argv):
         print(sys.modules["__main__"].__doc__ or "")
         return 0
     # SIGTERM (a scheduler's stop) unwinds like Ctrl-C, so every ``finally`` runs
+    global _TERMINATED
+    _TERMINATED = False
     previous = signal.signal(signal.SIGTERM, _terminate_as_interrupt)
     try:
         fn(argv)

@@ -22,6 +22,10 @@ class Bar:
             self.t = self.p.add_task(label, total=total, completed=done)
 
     def step(self, n: int = 1, text: str | None = None):
+        # every step is a safe point for a SIGTERM that was swallowed where it landed
+        from sim2real.cli import raise_if_terminated
+
+        raise_if_terminated()
         if self.enabled:
             self.p.update(self.t, advance=n, **({"description": text} if text is not None else {}))
 
