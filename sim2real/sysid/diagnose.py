@@ -80,12 +80,13 @@ class DiagnoseConfig:
     val_fraction: float = 0.3
     num_windows: int = 20
     coulomb_eps: float = 1e-3
-    min_gain: float = 0.05
-    min_t: float = 2.0
-    floor_level: float = 0.1
-    strong: float = 0.0
-    top: int = 4
-    max_effects: int = 3
+    # the selection's thresholds: tuned once, stated once (``select.SelectConfig``)
+    min_gain: float = SelectConfig.min_gain
+    min_t: float = SelectConfig.min_t
+    floor_level: float = SelectConfig.floor_level
+    strong: float = SelectConfig.strong
+    top: int = SelectConfig.top
+    max_effects: int = SelectConfig.max_effects
     tie_tolerance: float = 0.01
     plots: bool = True
     progress: bool = True
