@@ -185,6 +185,14 @@ def validate(cfg: TrainConfig) -> None:
     check(cfg.ppo)
 
 
+def _saved_config(out_dir, name) -> str:
+    """Path of the ``config.yaml`` of run ``out_dir/name``, which a resume needs."""
+    path = os.path.join(str(out_dir), str(name), "config.yaml")
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"resume=true but '{path}' does not exist (no run named '{name}' in '{out_dir}')")
+    return path
+
+
 def config_from_args(argv: list[str]) -> TrainConfig:
     """The command line's config. With ``resume=true`` the run's saved ``config.yaml`` is the config:
     ``name``/``out_dir`` (given, or read from ``config=``) find it, and other ``key=value``s may only
@@ -192,13 +200,10 @@ def config_from_args(argv: list[str]) -> TrainConfig:
     path, overrides = config_lib.parse_args(argv)
     if overrides.get("resume") is not True:
         return config_lib.load(TrainConfig, argv)
-    if overrides.get("overwrite") is True:
+    if overrides.get("overwrite") is True:  # (before looking for the run: the clearer message)
         raise config_lib.ConfigError("resume=true and overwrite=true contradict each other; choose one")
     start = config_lib.load(TrainConfig, ([f"config={path}"] if path else []))
-    name, out_dir = overrides.get("name", start.name), overrides.get("out_dir", start.out_dir)
-    saved = os.path.join(str(out_dir), str(name), "config.yaml")
-    if not os.path.exists(saved):
-        raise FileNotFoundError(f"resume=true but '{saved}' does not exist (no run named '{name}' in '{out_dir}')")
+    saved = _saved_config(overrides.get("out_dir", start.out_dir), overrides.get("name", start.name))
     bad = sorted(k for k in overrides if k not in RESUMABLE_KEYS + ("name", "out_dir"))
     if bad:
         raise config_lib.ConfigError(f"resume=true continues the run with its saved config ({saved}); only "
@@ -210,11 +215,7 @@ def config_from_args(argv: list[str]) -> TrainConfig:
 def resume_config(cfg: TrainConfig) -> TrainConfig:
     """The config a run is resumed with: its saved ``config.yaml``, with only ``RESUMABLE_KEYS`` taken
     from ``cfg``; any other difference is refused with the list of differences."""
-    path = os.path.join(cfg.out_dir, cfg.name, "config.yaml")
-    if not os.path.exists(path):
-        raise FileNotFoundError(f"resume=true but '{path}' does not exist (no run named '{cfg.name}' in "
-                                f"'{cfg.out_dir}')")
-    saved = config_lib.load(TrainConfig, [f"config={path}"])
+    saved = config_lib.load(TrainConfig, [f"config={_saved_config(cfg.out_dir, cfg.name)}"])
     mine, theirs = config_lib.to_dict(cfg), config_lib.to_dict(saved)
     diffs = [f"{k}: run has {theirs[k]!r}, given {mine[k]!r}" for k in mine
              if k not in RESUMABLE_KEYS and mine[k] != theirs[k]]
@@ -399,7 +400,7 @@ class Progress:
         eps = metrics.get("episodes")
         info = f"{sps:,.0f} steps/s"
         if ret is not None and eps is not None and np.sum(eps) > 0:
-            self.last_return = float(np.nansum(np.where(eps > 0, ret * eps, 0.0)) / np.sum(eps))
+            self.last_return = episode_mean(ret, eps)
         if self.last_return is not None:  # the last known return (no episode may end in a chunk)
             info += f"  return {self.last_return:,.1f}"
         elif "fitness_mean" in metrics:  # ES-MAML: return after adaptation, population mean
@@ -471,6 +472,13 @@ def load_run(run_dir: str, step: int | None = None):
     return cfg, env, algo, checkpoint.restore(mngr, step, template)
 
 
+def episode_mean(values, eps) -> float:
+    """Mean of a per-update episode statistic weighted by the episodes that ended in each update
+    (``values``, ``eps``: same shape; ``values`` is NaN where none ended, and weighs nothing there)."""
+    values, eps = np.asarray(values), np.asarray(eps)
+    return float(np.sum(np.where(eps > 0, values * eps, 0.0)) / np.sum(eps))
+
+
 def summary(metrics: dict) -> dict:
     """Means over seeds and updates; episode statistics weighted by the episodes that ended."""
     out = {k: float(np.nanmean(np.asarray(v))) if np.isfinite(np.asarray(v)).any() else float("nan")
@@ -479,8 +487,7 @@ def summary(metrics: dict) -> dict:
     for k in ("episode_return", "episode_length"):
         if k in metrics:
             if np.sum(eps) > 0:
-                v = np.asarray(metrics[k])
-                out[k] = float(np.sum(np.where(eps > 0, v * eps, 0.0)) / np.sum(eps))
+                out[k] = episode_mean(metrics[k], eps)
             else:  # no episode ended in these updates: there is no episode statistic to report
                 del out[k]
     return out

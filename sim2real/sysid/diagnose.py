@@ -133,6 +133,22 @@ def diagnose(cfg: DiagnoseConfig) -> dict:
         return _run(cfg, tmp)
 
 
+def _native_rollout(m: mujoco.MjModel, d: mujoco.MjData, tr, s: int, steps: int, substeps: int, qpos, qvel):
+    """Positions ``[steps, nq]`` of the native model from state ``(qpos, qvel)`` at sample ``s`` of
+    ``tr`` through its recorded commands (``substeps`` physics steps per sample); NaN past its end."""
+    d.qpos[:], d.qvel[:] = qpos, qvel
+    if m.na:
+        d.act[:] = 0.0
+    q = np.full((steps, m.nq), np.nan)
+    for k in range(min(steps, len(tr) - s - 1)):
+        d.ctrl[:] = tr.ctrl[s + k]
+        d.qfrc_applied[:] = tr.qfrc[s + k]
+        for _ in range(substeps):
+            mujoco.mj_step(m, d)
+        q[k] = d.qpos
+    return q
+
+
 def _native_runs(system: System, trajs, n: int, steps: int, starts: int = 3, substeps: int | None = None):
     """Positions ``[k, steps, nq]`` of the native model simulated from measured states at ``starts``
     points of every recording through the recorded commands (``substeps`` per sample)."""
@@ -145,17 +161,7 @@ def _native_runs(system: System, trajs, n: int, steps: int, starts: int = 3, sub
     try:
         for tr in trajs:
             for s in np.linspace(0, max(len(tr) - steps - 1, 0), starts).astype(int):
-                d.qpos[:], d.qvel[:] = tr.q[s], velocity_state(tr.v[s], tr.a[s], h)
-                if m.na:
-                    d.act[:] = 0.0
-                q = np.full((steps, m.nq), np.nan)
-                for k in range(min(steps, len(tr) - s - 1)):
-                    d.ctrl[:] = tr.ctrl[s + k]
-                    d.qfrc_applied[:] = tr.qfrc[s + k]
-                    for _ in range(sub):
-                        mujoco.mj_step(m, d)
-                    q[k] = d.qpos
-                out.append(q)
+                out.append(_native_rollout(m, d, tr, s, steps, sub, tr.q[s], velocity_state(tr.v[s], tr.a[s], h)))
     finally:
         m.opt.timestep = system.h
     return np.stack(out)
@@ -211,20 +217,8 @@ def choose_horizon(system: System, trajs, budget: int = 6000, max_seconds: float
     for tr in trajs:
         for s in np.linspace(0, max(len(tr) - n_max - 1, 0), 4).astype(int):
             v = velocity_state(tr.v[s], tr.a[s], system.h)
-            runs = []
-            for dq, dv in ((0.0, 0.0), (tr.sigma_q * rng.choice([-1, 1], m.nq), tr.sigma_v * rng.choice([-1, 1], m.nv))):
-                d.qpos[:], d.qvel[:] = tr.q[s] + dq, v + dv
-                if m.na:
-                    d.act[:] = 0.0
-                q = []
-                for k in range(min(n_max, len(tr) - s - 1)):
-                    d.ctrl[:] = tr.ctrl[s + k]
-                    d.qfrc_applied[:] = tr.qfrc[s + k]
-                    for _ in range(n):
-                        mujoco.mj_step(m, d)
-                    q.append(d.qpos.copy())
-                q = np.array(q).reshape(-1, m.nq)
-                runs.append(np.concatenate([q, np.full((n_max - len(q), m.nq), np.nan)]))
+            runs = [_native_rollout(m, d, tr, s, n_max, n, tr.q[s] + dq, v + dv) for dq, dv in (
+                (0.0, 0.0), (tr.sigma_q * rng.choice([-1, 1], m.nq), tr.sigma_v * rng.choice([-1, 1], m.nv)))]
             meas = tr.q[s + 1: s + 1 + n_max]
             meas = np.concatenate([meas, np.full((n_max - len(meas), m.nq), np.nan)])
             errs.append(np.nanmax(np.abs(runs[0] - meas) / spread, 1))
@@ -290,9 +284,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         bar.step(text="checking on held-out data")
         # held-out check: nothing is kept that predicts held-out data worse than the nominal model
         # (judged by the error the report shows: every signal's NRMSE, averaged)
-        checked = [float(np.mean(list(nr.values())))
-                   for nr, _ in _nrmse(sh, fitter, [z0] + [M.z for M in steps], check_tiles)]
-        nominal_ho, step_ho = checked[0], checked[1:]
+        checked = _nrmse(sh, fitter, [z0] + [M.z for M in steps], check_tiles)
+        scores = [float(np.mean(list(nr.values()))) for nr, _ in checked]
+        nominal_ho, step_ho = scores[0], scores[1:]
         keep = len(steps) - 1
         while keep > 0 and step_ho[keep] > nominal_ho:
             keep -= 1
@@ -305,10 +299,11 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             answer = "inconclusive"
         else:
             answer = "none"
-        z_fit = chosen.z if not (keep == 0 and refit_worse) else z0
+        fitted = 0 if keep == 0 and refit_worse else keep + 1  # index into ``checked``: z0, then steps
+        z_fit = chosen.z if fitted else z0
         bar.step(text="writing the report")
         d = _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_worse, answer, z_fit,
-                      nominal_ho, step_ho, trajs, train, held, check_tiles, out, t_start)
+                      checked[0], checked[fitted], step_ho, pred0, trajs, train, held, check_tiles, out, t_start)
         bar.step(text="done")
         return d
     finally:
@@ -349,19 +344,18 @@ def _signal_names(sh: Shooting) -> dict:
             "force": [f"force:{a}" for a in s.actuators]}
 
 
-def _effect_row(system, cand, model, std=None) -> dict:
-    z = model.z
+def _effect_row(system, cand, model, dt: float) -> dict:
+    """``cand``'s fitted values in ``model`` (their std and units); a delay also in seconds (``dt``: s/sample)."""
     spec = system.spec
-    params = {n: float(z[spec.index(n)]) for n in cand.params}
+    params = {n: float(model.z[spec.index(n)]) for n in cand.params}
     if "action_delay" in params:
-        params["action_delay_seconds"] = params["action_delay"] * system.h * system.substeps
-    st = {n: model.result.std.get(n) for n in cand.params}
-    return {"effect": cand.effect, "target": cand.target, "params": params, "std": st,
-            "units": {n: spec[n].unit for n in cand.params}}
+        params["action_delay_seconds"] = params["action_delay"] * dt
+    return {"effect": cand.effect, "target": cand.target, "params": params,
+            "std": {n: model.result.std.get(n) for n in cand.params}, "units": {n: spec[n].unit for n in cand.params}}
 
 
 def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_worse, answer, z_fit,
-              nominal_ho, step_ho, trajs, train, held, check_tiles, out, t_start) -> dict:
+              check_before, check_after, step_ho, pred0, trajs, train, held, check_tiles, out, t_start) -> dict:
     spec = system.spec
     z0 = spec.default.copy()
     notes = list(system.notes)
@@ -372,11 +366,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     selected = []
     for k, c in enumerate(chosen.effects):
         M_prev, M = steps[k], steps[k + 1]
-        row = _effect_row(system, c, M if k + 1 == len(chosen.effects) else chosen)
-        row["params"] = {n: float(chosen.z[spec.index(n)]) for n in c.params}
-        if "action_delay" in row["params"]:
-            row["params"]["action_delay_seconds"] = row["params"]["action_delay"] * trajs[0].dt
-        row["std"] = {n: chosen.result.std.get(n) for n in c.params}
+        row = _effect_row(system, c, chosen, trajs[0].dt)
         ratio, t = sel.judge(M_prev, M)
         row.update(validation_ratio=ratio, t=t)
         trial = next((tr for rnd in sel.rounds for tr in rnd if tr.model is M), None)
@@ -435,7 +425,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
             + (" -- with no known force, positions fix forces only up to a common scale: values are relative "
                "to the nominal masses" if not system.mj.nu else ""))
     # before / after on the check segments
-    (nr_b, pred_b), (nr_a, pred_a) = _nrmse(sh, fitter, [z0, z_fit], check_tiles)
+    (nr_b, pred_b), (nr_a, pred_a) = check_before, check_after
     before, after = float(np.mean(list(nr_b.values()))), float(np.mean(list(nr_a.values())))
     fit = {"metric": f"{sh.H * trajs[0].dt:.3g} s predictions from measured states (initial velocities refined)",
            "recordings": [r.name for r in held] if held else [f"{r.name} (last {100 * cfg.val_fraction:g}%)" for r in train],
@@ -449,7 +439,10 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     nominal_refit = {n: {"nominal": float(spec[n].default), "fitted": float(z_fit[spec.index(n)]),
                          "std": chosen.result.std.get(n), "unit": spec[n].unit} for n in system.nominal}
     # the mismatch before any fit: where the nominal model's predictions and forces are wrong
-    mismatch = _locate(cfg, system, sh, fitter, trajs[: len(train)], z0)
+    # (the nominal model's inverse-dynamics residual serves the mismatch table and the plots)
+    rows = invdyn.rows(trajs[: len(train)])
+    res0 = invdyn.residual(system, z0, trajs[: len(train)], rows)
+    mismatch = _locate(system, sh, pred0, res0)
     fitted_params = {n: float(z_fit[spec.index(n)]) for n in system.nominal}
     for c in chosen.effects:
         fitted_params.update({n: float(z_fit[spec.index(n)]) for n in c.params})
@@ -475,7 +468,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     images = {}
     if cfg.plots:
         images = report.figures(d, system, sh, check_tiles, pred_b, pred_a, trajs, len(train), out,
-                                invdyn_rows=_residuals_for_plots(system, trajs[: len(train)], z0, z_fit))
+                                invdyn_rows=(res0, invdyn.residual(system, z_fit, trajs[: len(train)], rows)))
     d["figures"] = list(images.values())
     report.markdown(os.path.join(out, "report.md"), d, images)
     with open(os.path.join(out, "diagnosis.json"), "w") as f:
@@ -491,16 +484,11 @@ def _json_default(x):
     return str(x)
 
 
-def _residuals_for_plots(system, trajs, z0, z_fit):
-    idx = invdyn.rows(trajs)
-    return invdyn.residual(system, z0, trajs, idx), invdyn.residual(system, z_fit, trajs, idx)
-
-
-def _locate(cfg, system, sh, fitter, trajs, z0) -> dict:
+def _locate(system, sh, pred, res) -> dict:
     """Per-signal prediction error of the nominal model, its worst windows, and the inverse-dynamics
-    residual per regime and joint (``locate.py``)."""
+    residual per regime and joint (``locate.py``). ``pred``: the nominal model's predictions of the
+    training segments (fit, then validation); ``res``: its inverse-dynamics residual."""
     tiles = np.concatenate([sh.tiles.of("fit"), sh.tiles.of("val")])
-    pred = sh.predict(z0[None], fitter.v_hat[None], tiles)
     names = _signal_names(sh)
     out = {"signals": {}, "worst_windows": [], "regimes": {}, "residual_offset_ratio": {}}
     for key, meas in sh.signals.items():
@@ -517,7 +505,6 @@ def _locate(cfg, system, sh, fitter, trajs, z0) -> dict:
                                              "t_end": float(tr.time[min(start + sh.H, len(tr) - 1)]),
                                              "nrmse": float(np.sqrt(np.mean(e[i, :, k] ** 2)) / std)})
     out["worst_windows"] = sorted(out["worst_windows"], key=lambda w: -w["nrmse"])[:10]
-    res = invdyn.residual(system, z0, trajs, invdyn.rows(trajs))
     m = system.mj
     for j, jn in enumerate(system.joints):
         dof = m.jnt_dofadr[j]

@@ -100,6 +100,14 @@ def _paired_t(d: np.ndarray) -> float:
     return float(np.mean(d) / (np.std(d, ddof=1) / np.sqrt(len(d))))
 
 
+def _at_edge(c: Candidate, v: float) -> bool:
+    """``v`` (the candidate's first parameter) ended at the edge of its search range that widening
+    moves: the top for timing effects and backlash, the bottom for a saturation."""
+    lo, hi = c.search[0]
+    return ((c.effect in ("motor_lag", "action_delay", "backlash") and v >= 0.98 * hi)
+            or (c.effect == "actuator_saturation" and v <= 1.02 * lo))
+
+
 class Selector:
     """Forward selection over ``candidates`` with ``fitter`` on the fit/validation segments."""
 
@@ -249,20 +257,14 @@ class Selector:
         C = self.fit(M.effects + [c], z0, M.result.v0)
         # a fit that ends at the edge of the searched range: widen once and fit again
         v = float(C.z[self.spec.index(c.params[0])])
-        lo, hi = c.search[0]
-        edge = (c.effect in ("motor_lag", "action_delay", "backlash") and v >= 0.98 * hi) or (
-            c.effect == "actuator_saturation" and v <= 1.02 * lo)
-        if edge:
+        if _at_edge(c, v):
             wide = c.widen()
-            z1 = C.z.copy()
-            C2 = self.fit(M.effects + [wide], z1, C.result.v0)
+            C2 = self.fit(M.effects + [wide], C.z.copy(), C.result.v0)
             trial.note = f"{c.params[0]} ended at the edge of its range ({v:.4g}); searched wider"
             if C2.result.phi < C.result.phi:
                 C, trial.candidate = C2, wide
             v2 = float(C.z[self.spec.index(trial.candidate.params[0])])
-            lo2, hi2 = trial.candidate.search[0]
-            if (trial.candidate.effect != "actuator_saturation" and v2 >= 0.98 * hi2) or (
-                    trial.candidate.effect == "actuator_saturation" and v2 <= 1.02 * lo2):
+            if _at_edge(trial.candidate, v2):
                 trial.note += f"; still at the edge after widening ({v2:.4g}): the value is a bound, not an estimate"
         trial.model = C
         return trial
