@@ -67,9 +67,20 @@ def _terminate_as_interrupt(signum, frame):
 
 def raise_if_terminated() -> None:
     """A safe point: re-raise a SIGTERM whose KeyboardInterrupt was swallowed where it landed
-    (a JAX garbage-collection callback prints "Exception ignored" and carries on)."""
+    (a JAX garbage-collection callback, say, which ignores it and carries on)."""
     if _TERMINATED:
         raise KeyboardInterrupt
+
+
+def _quiet_swallowed_interrupt(previous_hook):
+    """An ``sys.unraisablehook`` that drops the "Exception ignored ... Traceback" Python prints for
+    a SIGTERM's KeyboardInterrupt swallowed in a callback (``raise_if_terminated`` re-raises it);
+    everything else goes to ``previous_hook``."""
+    def hook(unraisable):
+        if _TERMINATED and unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            return
+        previous_hook(unraisable)
+    return hook
 
 
 def main_guard(fn, argv):
@@ -84,6 +95,8 @@ def main_guard(fn, argv):
     global _TERMINATED
     _TERMINATED = False
     previous = signal.signal(signal.SIGTERM, _terminate_as_interrupt)
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = _quiet_swallowed_interrupt(previous_hook)
     try:
         fn(argv)
     except (ConfigError, KeyError, ValueError, FileNotFoundError, FileExistsError, TypeError,
@@ -99,3 +112,4 @@ def main_guard(fn, argv):
         sys.exit(INTERRUPTED)
     finally:
         signal.signal(signal.SIGTERM, previous)
+        sys.unraisablehook = previous_hook
