@@ -34,7 +34,7 @@ from sim2real.sysid.recordings import RecordingError, check_sample_rate, load_al
 from sim2real.sysid.select import SelectConfig, Selector
 from sim2real.sysid.shooting import Shooting
 from sim2real.sysid.system import System
-from sim2real.sysid.trajectory import from_recording
+from sim2real.sysid.trajectory import from_recording, signal_scale
 
 
 @dataclasses.dataclass(frozen=True)
@@ -175,8 +175,7 @@ def choose_substeps(system: System, trajs, max_substeps: int = 64, seconds: floa
     makes up for the integrator's, a lag for its phase error)."""
     n = system.substeps
     steps = max(5, int(round(seconds / trajs[0].dt)))
-    q_all = np.concatenate([t.q for t in trajs])
-    scale = np.sqrt(np.stack([t.sigma_q for t in trajs]).max(0) ** 2 + (0.01 * q_all.std(0)) ** 2) + 1e-12
+    scale = signal_scale([t.sigma_q for t in trajs], np.concatenate([t.q for t in trajs])) + 1e-12
     prev = _native_runs(system, trajs, steps, steps, substeps=n)
     while 2 * n <= max_substeps:
         fine = _native_runs(system, trajs, steps, steps, substeps=2 * n)

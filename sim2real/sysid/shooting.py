@@ -28,6 +28,7 @@ import numpy as np
 from sim2real.physics import stepper
 from sim2real.physics.params import clip
 from sim2real.sysid.derivatives import velocity_state
+from sim2real.sysid.trajectory import SPREAD_FLOOR, signal_scale
 
 B = 8  # physics vectors per call
 
@@ -68,7 +69,7 @@ class Shooting:
     """
 
     def __init__(self, system, trajs, horizon: int, heldout=(), val_fraction: float = 0.3,
-                 floor: float = 0.01, batch: int = B, budget: int = 6000):
+                 floor: float = SPREAD_FLOOR, batch: int = B, budget: int = 6000):
         self.sys, self.trajs, self.H = system, trajs, int(horizon)
         self.B = int(batch)
         m = system.mj
@@ -115,18 +116,15 @@ class Shooting:
         # measured targets of every segment: samples start+1 .. start+H
         idx = self.tiles.start[:, None] + 1 + np.arange(H)[None]
         self.signals = {"qpos": q_all[idx]}
-        sig_q = np.stack([tr.sigma_q for tr in trajs]).max(0)
-        scale = {"qpos": np.sqrt(sig_q**2 + (floor * q_all.std(0)) ** 2)}
+        scale = {"qpos": signal_scale([tr.sigma_q for tr in trajs], q_all, floor)}
         if all(tr.qvel is not None for tr in trajs):
             qv = cat(lambda tr: tr.qvel)
             self.signals["qvel"] = qv[idx]
-            s_v = np.stack([tr.sigma_qvel for tr in trajs]).max(0)
-            scale["qvel"] = np.sqrt(s_v**2 + (floor * qv.std(0)) ** 2)
+            scale["qvel"] = signal_scale([tr.sigma_qvel for tr in trajs], qv, floor)
         if m.nu and all(tr.force is not None for tr in trajs):
             fo = cat(lambda tr: tr.force)
             self.signals["force"] = fo[idx]
-            s_f = np.stack([tr.sigma_force for tr in trajs]).max(0)
-            scale["force"] = np.sqrt(s_f**2 + (floor * fo.std(0)) ** 2)
+            scale["force"] = signal_scale([tr.sigma_force for tr in trajs], fo, floor)
         self.scale = {k: np.maximum(v, 1e-12) for k, v in scale.items()}
         # the measured state at every segment start
         st = self.tiles.start

@@ -59,6 +59,17 @@ class Trajectory:
         return len(self.time)
 
 
+# a signal's weight in the fits is 1 / (noise^2 + (SPREAD_FLOOR * its std)^2): a signal measured
+# with almost no noise still does not outweigh every other one (``signal_scale``)
+SPREAD_FLOOR = 0.01
+
+
+def signal_scale(sigmas, values: np.ndarray, floor: float = SPREAD_FLOOR) -> np.ndarray:
+    """``[n]`` scale each column of ``values [T, n]`` is weighed with: the largest of its
+    recordings' noise stds ``sigmas [R, n]``, combined with ``floor`` times its spread."""
+    return np.sqrt(np.max(sigmas, 0) ** 2 + (floor * np.std(values, 0)) ** 2)
+
+
 def noise_std(x: np.ndarray) -> np.ndarray:
     """Per column of ``x [T, n]``: the std of white measurement noise on a smooth signal.
 
