@@ -158,6 +158,34 @@ def test_recordings_round_trip_and_errors(simopt, tmp_path):
         real_from_recordings(so, [bad])
 
 
+def test_recordings_without_qvel_differentiate_positions_as_the_diagnosis_does(simopt, tmp_path):
+    """No ``qvel`` columns: velocities are the Trajectory's Savitzky-Golay derivative of the
+    positions; a recording too short to differentiate is refused by name (by the reader)."""
+    so, st, zt, real = simopt
+    paths = save_recordings(so, real, str(tmp_path))
+    stripped = []
+    for i, path in enumerate(paths):
+        with open(path) as f:
+            rows = [ln.split(",") for ln in f.read().splitlines()]
+        keep = [j for j, h in enumerate(rows[0]) if not h.startswith("qvel:")]
+        stripped.append(os.path.join(str(tmp_path), f"noqvel_{i}.csv"))
+        with open(stripped[-1], "w") as f:
+            f.write("\n".join(",".join(r[j] for j in keep) for r in rows) + "\n")
+    back = real_from_recordings(so, stripped)
+    nq = so.env.mj_model.nq
+    q_back, q_real = np.asarray(back.signals[..., :nq]), np.asarray(real.signals[..., :nq])
+    np.testing.assert_allclose(q_back, q_real, atol=1e-6)
+    v_back, v_real = np.asarray(back.signals[..., nq:]), np.asarray(real.signals[..., nq:])
+    assert np.sqrt(np.mean((v_back - v_real) ** 2)) < 0.1 * np.sqrt(np.mean(v_real ** 2))
+    short = os.path.join(str(tmp_path), "short.csv")
+    with open(stripped[0]) as f:
+        lines = f.read().splitlines()[:6]  # header + 5 rows
+    with open(short, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    with pytest.raises(RecordingError, match="short.csv: only 5 samples"):
+        real_from_recordings(so, [short])
+
+
 def test_bad_config_is_named():
     env = make("pendulum")
     dr = DRConfig(params=("mass:pole",), low=(0.3,), high=(3.0,))

@@ -292,38 +292,31 @@ class SimOpt:
 def real_from_recordings(sim: SimOpt, paths) -> RealData:
     """Real rollouts from recordings (CSV/NPZ, the diagnosis format) sampled at the env's control step.
 
-    Each recording needs ``qpos:<joint>`` for every joint of the env's model (``qvel:<joint>`` too,
-    else velocities are differentiated); rollouts shorter than the horizon are masked, longer ones cut.
+    Each recording needs ``qpos:<joint>`` for every joint of the env's model; rollouts shorter than
+    the horizon are masked, longer ones cut. Each is read as the diagnosis reads it (a
+    ``sysid.trajectory.Trajectory``): a ``qvel:<joint>`` column is compared as measured (the
+    simulator's states are compared with what the sensor gave, step by step); without one, the
+    velocities are the positions' Savitzky-Golay derivative over the window the data's noise allows.
     """
     from sim2real.sysid import recordings as rec_lib
+    from sim2real.sysid.trajectory import ModelColumns, from_recording
 
     env = sim.env
     recs = rec_lib.load_all(paths, env.mj_model, "SimOpt real recordings")
     rec_lib.check_sample_rate(recs, env.dt, f"the env's control step ({env.dt:g} s)")
-    import mujoco
-
-    m = env.mj_model
+    columns = ModelColumns(env.mj_model, f"the {env.name} env's model")
     T = sim.horizon
     out = []
     for r in recs:
-        q, v = [], []
-        for j in range(m.njnt):
-            name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j)
-            qp = r.get("qpos", name)
-            if qp is None:
-                raise rec_lib.RecordingError(f"{r.path}: missing column 'qpos:{name}' (SimOpt compares every joint)")
-            qv = r.get("qvel", name)
-            q.append(qp)
-            v.append(np.gradient(qp, r.time) if qv is None else qv)
-        q, v = np.stack(q, -1), np.stack(v, -1)
+        tr = from_recording(r, columns)
+        q, v = tr.q, (tr.qvel if tr.qvel is not None else tr.v)
         # row 0 is the initial state; rows 1.. are the states after each control step
         sig = np.concatenate([q[1:], v[1:]], -1)[:T]
         mask = np.ones(len(sig), np.float32)
         if len(sig) < T:
             sig = np.concatenate([sig, np.repeat(sig[-1:], T - len(sig), 0)])
             mask = np.concatenate([mask, np.zeros(T - len(mask), np.float32)])
-        acts = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(m.nu)]
-        u = np.stack([r.get("ctrl", a) for a in acts], -1)[:-1][:T]
+        u = tr.ctrl[:-1][:T]
         if len(u) < T:
             u = np.concatenate([u, np.repeat(u[-1:], T - len(u), 0)])
         out.append((sig, mask, q[0], v[0], u))

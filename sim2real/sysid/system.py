@@ -24,6 +24,7 @@ from sim2real.physics import catalog
 from sim2real.physics.effects import Effects, EffectsConfig
 from sim2real.physics.model_apply import PhysicsModel
 from sim2real.physics.params import Param, ParamSpec
+from sim2real.sysid.trajectory import ModelColumns
 
 
 class ModelError(ValueError):
@@ -89,10 +90,11 @@ class System:
         self.xml_path = xml_path
         self.notes: list[str] = []
         check_model(m, xml_path)
-        jn = _names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt)
+        self.columns = ModelColumns(m, xml_path)
+        jn = self.columns.joints
         self._adapt(m, dt, substeps)
         self.joints = jn
-        self.actuators = _names(m, mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu)
+        self.actuators = self.columns.actuators
         self.bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody)
         moving = [b for b in range(1, m.nbody) if m.body_mass[b] > 0 and self._moves(m, b)]
         params: list[Param] = catalog.body_mass_params(m, moving)
@@ -178,27 +180,9 @@ class System:
         return f"coulomb:{joint}" in self.nominal
 
     def check_recording_covers(self, rec) -> None:
-        """Every joint must be measured (the state is set from the data)."""
-        missing = [j for j in self.joints if rec.get("qpos", j) is None]
-        if missing:
-            from sim2real.sysid.recordings import RecordingError
-
-            raise RecordingError(f"{rec.path}: no qpos column for joint(s) {', '.join(missing)} of the model "
-                                 f"({self.xml_path}); every joint's position must be recorded")
+        """Every joint must be measured (``trajectory.ModelColumns``)."""
+        self.columns.check_recording_covers(rec)
 
     def arrays(self, rec):
-        """Recording -> ``(qpos [T, nq], ctrl [T, nu], force [T, nu] or None, qfrc [T, nv])`` in model order."""
-        self.check_recording_covers(rec)
-        T = len(rec)
-        qpos = np.stack([rec.get("qpos", j) for j in self.joints], -1)
-        ctrl = (np.stack([rec.get("ctrl", a) for a in self.actuators], -1) if self.actuators
-                else np.zeros((T, 0)))
-        force = None
-        if self.actuators and all(rec.get("force", a) is not None for a in self.actuators):
-            force = np.stack([rec.get("force", a) for a in self.actuators], -1)
-        qfrc = np.zeros((T, self.mj.nv))
-        for j, name in enumerate(self.joints):
-            col = rec.get("qfrc", name)
-            if col is not None:
-                qfrc[:, self.mj.jnt_dofadr[j]] = col
-        return qpos, ctrl, force, qfrc
+        """Recording -> model-order arrays (``trajectory.ModelColumns.arrays``)."""
+        return self.columns.arrays(rec)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import mujoco
 import numpy as np
 from scipy.signal import savgol_coeffs, savgol_filter
 
@@ -109,12 +110,55 @@ def choose_window(x: np.ndarray, sigma: np.ndarray, dt: float, max_seconds: floa
     return best
 
 
+class ModelColumns:
+    """The recording columns a MuJoCo model reads, in model order: ``qpos:<joint>`` (and
+    ``qvel:<joint>``, ``qfrc:<joint>``) per joint, ``ctrl:<actuator>`` (and ``force:<actuator>``)
+    per actuator. The diagnosis' ``System`` and SimOpt's recordings path both read through it.
+
+    ``source`` names the model in errors (a file path, or e.g. "the env's model").
+    """
+
+    def __init__(self, m: mujoco.MjModel, source: str):
+        self.source = source
+        self.joints = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(m.njnt)]
+        self.actuators = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(m.nu)]
+        self.nv = int(m.nv)
+        self.dofadr = np.asarray(m.jnt_dofadr).copy()
+
+    def check_recording_covers(self, rec) -> None:
+        """Every joint must be measured (the state is set from the data)."""
+        missing = [j for j in self.joints if rec.get("qpos", j) is None]
+        if missing:
+            from sim2real.sysid.recordings import RecordingError
+
+            raise RecordingError(f"{rec.path}: no qpos column for joint(s) {', '.join(missing)} of the model "
+                                 f"({self.source}); every joint's position must be recorded")
+
+    def arrays(self, rec):
+        """Recording -> ``(qpos [T, nq], ctrl [T, nu], force [T, nu] or None, qfrc [T, nv])`` in model order."""
+        self.check_recording_covers(rec)
+        T = len(rec)
+        qpos = np.stack([rec.get("qpos", j) for j in self.joints], -1)
+        ctrl = (np.stack([rec.get("ctrl", a) for a in self.actuators], -1) if self.actuators
+                else np.zeros((T, 0)))
+        force = None
+        if self.actuators and all(rec.get("force", a) is not None for a in self.actuators):
+            force = np.stack([rec.get("force", a) for a in self.actuators], -1)
+        qfrc = np.zeros((T, self.nv))
+        for j, name in enumerate(self.joints):
+            col = rec.get("qfrc", name)
+            if col is not None:
+                qfrc[:, self.dofadr[j]] = col
+        return qpos, ctrl, force, qfrc
+
+
 def _smooth(x, w, dt, deriv):
     return savgol_filter(x, w, 3, deriv=deriv, delta=dt, axis=0, mode="interp")
 
 
 def from_recording(rec, system, window: int | None = None) -> Trajectory:
-    """Build the trajectory of ``rec`` for ``system`` (a ``sysid.system.System``).
+    """Build the trajectory of ``rec`` for ``system`` (a ``sysid.system.System`` or a
+    :class:`ModelColumns`: what has ``arrays`` and ``joints``).
 
     ``window``: Savitzky-Golay window in samples (default: chosen from the data).
     """
