@@ -2,8 +2,8 @@
 # PPO seed-spread ablation on the GPU (issue: PPO that every seed can trust).
 # Each variant: ${SEEDS:-5} vmapped seeds of configs/hopper.yaml (+ overrides), STEPS env steps per
 # seed, every seed's deterministic policy evaluated on 32 episodes (benchmarks/hopper_ppo.py).
-# With PARALLEL=1 the variants run as concurrent processes sharing the GPU (each gets a quarter of
-# its memory): their throughput figures are then shared too and not comparable with a lone run.
+# Variants run one after another: as concurrent processes sharing one H100 they were no faster in
+# total (three 8-seed x 100M hopper runs had not finished after 560 s; in turn, about 3 x 180 s).
 #   bash benchmarks/ppo_ablation.sh OUTDIR STEPS "name|overrides" ...
 set -u
 out=$1; steps=$2; shift 2
@@ -17,11 +17,4 @@ one() {
   cp "$out/runs/$name/summary.json" "$out/$name.json" 2>/dev/null
   cp "$out/runs/$name/metrics.csv" "$out/${name}_metrics.csv" 2>/dev/null
 }
-if [ "${PARALLEL:-0}" = 1 ]; then
-  export XLA_PYTHON_CLIENT_MEM_FRACTION=0.22
-  for v in "$@"; do one "$v" > "$out/${v%%|*}.log" 2>&1 & done
-  wait
-  cat "$out"/*.log
-else
-  for v in "$@"; do one "$v"; done
-fi
+for v in "$@"; do one "$v"; done
