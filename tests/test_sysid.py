@@ -179,3 +179,33 @@ def test_segments_start_the_command_path_from_the_recording(tmp_path):
     e_restart = np.asarray(restarted["qpos"]) - sh.signals["qpos"][tiles]
     e_pass1 = sh.predict(z[None], sh.v0[None], tiles)["qpos"][0] - sh.signals["qpos"][tiles]
     assert np.sqrt(np.mean(e_pass1 ** 2)) < 0.5 * np.sqrt(np.mean(e_restart ** 2))
+
+
+def test_fitted_xml_scales_the_gain_law_as_the_simulator_does(tmp_path):
+    """A motor and a position servo with their gains (and the servo's kv) off the declared values:
+    the compiled fitted.xml holds the same gain/bias parameters as the model the fits simulate."""
+    from sim2real.physics.model_apply import to_mjmodel
+    from sim2real.sysid.export import write_fitted_mjcf
+    from sim2real.sysid.system import System
+
+    xml = tmp_path / "arm.xml"
+    xml.write_text("""<mujoco><option timestep="0.002"/><worldbody>
+      <body name="a"><joint name="j1" type="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/>
+        <body name="b" pos="0 0 -0.3"><joint name="j2" type="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.02" mass="0.2"/></body>
+      </body></worldbody>
+      <actuator><motor name="m1" joint="j1" gear="5"/><position name="p2" joint="j2" kp="8" kv="0.5"/></actuator></mujoco>""")
+    system = System(str(xml))
+    sp = system.spec
+    z = np.array(sp.default, float)
+    scale = {"gain:m1": 1.5, "gain:p2": 2.0, "kv:p2": 3.0}
+    for name, f in scale.items():
+        z[sp.index(name)] *= f
+    simulated = to_mjmodel(system.physics, z)
+    write_fitted_mjcf(str(xml), system, z, {}, str(tmp_path / "fitted.xml"))
+    fitted = mujoco.MjModel.from_xml_path(str(tmp_path / "fitted.xml"))
+    for field in ("actuator_gainprm", "actuator_biasprm"):
+        np.testing.assert_allclose(getattr(fitted, field)[:, :3], getattr(simulated, field)[:, :3], rtol=1e-5)
+    declared = mujoco.MjModel.from_xml_path(str(xml))
+    assert fitted.actuator_gainprm[1, 0] == pytest.approx(2.0 * declared.actuator_gainprm[1, 0])
+    assert fitted.actuator_biasprm[1, 1] == pytest.approx(2.0 * declared.actuator_biasprm[1, 1])  # -kp follows kp
+    assert fitted.actuator_biasprm[1, 2] == pytest.approx(3.0 * declared.actuator_biasprm[1, 2])

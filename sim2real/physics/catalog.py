@@ -155,6 +155,22 @@ def actuator_gain_params(m: mujoco.MjModel, actuators) -> list[Param]:
     return ps
 
 
+def gain_law_entries(m: mujoco.MjModel, kind: str, a: int) -> list[tuple[str, int]]:
+    """The ``(field, column)`` entries of actuator ``a``'s declared gain/bias law that a ``gain:``
+    (``kind`` "actuator_gain") or ``kv:`` ("actuator_kv") parameter scales by value / default.
+
+    The gain, and with it a position-like servo's stiffness bias -kp*q (which must follow kp, or
+    the servo's set point moves); ``kv`` scales the damping bias -kv*qdot. ``field`` is the MjSpec
+    actuator attribute; the compiled model's is ``"actuator_" + field``. At the default value the
+    law is exactly the declared one (``PhysicsModel.apply`` and ``export`` both use this).
+    """
+    if kind == "actuator_gain":
+        return [("gainprm", 0)] + ([("biasprm", 1)] if m.actuator_biasprm[a, 1] != 0 else [])
+    if kind == "actuator_kv":
+        return [("biasprm", 2)]
+    raise ValueError(f"not an actuator gain kind: {kind!r}")
+
+
 def is_servo(m: mujoco.MjModel, a: int) -> bool:
     """A position servo (gain fixed, bias affine in qpos): force = kp*ctrl - kp*q - kv*qdot."""
     return (m.actuator_gaintype[a] == mujoco.mjtGain.mjGAIN_FIXED

@@ -20,7 +20,7 @@ import numpy as np
 from mujoco import mjx
 
 from sim2real.physics import massprops
-from sim2real.physics.catalog import link_axis
+from sim2real.physics.catalog import gain_law_entries, link_axis
 from sim2real.physics.params import ParamSpec, clip
 
 _NO_LIMIT = 1e30  # force clamp that never binds: exactly neutral
@@ -131,16 +131,12 @@ class PhysicsModel:
             f["jnt_stiffness"] = get("jnt_stiffness").at[p.index].add(z[i])
 
         # --- actuators --------------------------------------------------------------------
-        # gains scale the declared gain/bias law (exactly the declared model at the default): a
-        # position-like servo's stiffness bias -kp*q follows kp, its damping bias follows kv
-        for i, p in spec.of_kind("actuator_gain"):
-            a, ratio = p.index, z[i] / p.default if p.default else z[i]
-            f["actuator_gainprm"] = get("actuator_gainprm").at[a, 0].set(m0.actuator_gainprm[a, 0] * ratio)
-            if self.mj.actuator_biasprm[a, 1] != 0:
-                f["actuator_biasprm"] = get("actuator_biasprm").at[a, 1].set(m0.actuator_biasprm[a, 1] * ratio)
-        for i, p in spec.of_kind("actuator_kv"):
-            a, ratio = p.index, z[i] / p.default if p.default else z[i]
-            f["actuator_biasprm"] = get("actuator_biasprm").at[a, 2].set(m0.actuator_biasprm[a, 2] * ratio)
+        for kind in ("actuator_gain", "actuator_kv"):
+            for i, p in spec.of_kind(kind):
+                a, ratio = p.index, z[i] / p.default if p.default else z[i]
+                for field, col in gain_law_entries(self.mj, kind, a):
+                    name = f"actuator_{field}"
+                    f[name] = get(name).at[a, col].set(getattr(m0, name)[a, col] * ratio)
         for i, p in spec.of_kind("saturation"):
             a, s = p.index, z[i]
             on = s > 0

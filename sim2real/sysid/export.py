@@ -13,6 +13,8 @@ import os
 import mujoco
 import numpy as np
 
+from sim2real.physics.catalog import gain_law_entries
+
 
 def write_fitted_mjcf(xml_path: str, system, z: np.ndarray, fitted: dict[str, float], path: str) -> None:
     spec = mujoco.MjSpec.from_file(xml_path)
@@ -44,14 +46,8 @@ def write_fitted_mjcf(xml_path: str, system, z: np.ndarray, fitted: dict[str, fl
             spec.joint(system.joints[p.index]).frictionloss = v
         elif p.kind in ("actuator_gain", "actuator_kv") and v != p.default and p.default:
             a = spec.actuator(system.actuators[p.index])
-            ratio = v / p.default  # the declared gain/bias law, scaled (as PhysicsModel.apply does)
-            m = system.mj
-            if p.kind == "actuator_gain":
-                a.gainprm[0] = float(m.actuator_gainprm[p.index, 0]) * ratio
-                if m.actuator_biasprm[p.index, 1] != 0:
-                    a.biasprm[1] = float(m.actuator_biasprm[p.index, 1]) * ratio
-            else:
-                a.biasprm[2] = float(m.actuator_biasprm[p.index, 2]) * ratio
+            for field, col in gain_law_entries(system.mj, p.kind, p.index):
+                getattr(a, field)[col] = float(getattr(system.mj, f"actuator_{field}")[p.index, col]) * v / p.default
         elif p.kind == "saturation" and v > 0:
             a = spec.actuator(system.actuators[p.index])
             a.forcelimited = 1
