@@ -29,18 +29,24 @@ from sim2real.train import TrainConfig, train
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def main(argv):
-    own = {"target": 2500.0, "eval_episodes": 128}
-    rest = []
+def load_args(argv, own: dict):
+    """``key=value`` arguments -> ``(own, cfg)``: the script's ``own`` keys (converted to the
+    type of their default) and the ``TrainConfig`` from the rest (``config=`` default:
+    ``configs/hopper.yaml``)."""
+    own, rest = dict(own), []
     for a in argv:
-        k = a.split("=", 1)[0]
+        k, _, v = a.partition("=")
         if k in own:
-            own[k] = type(own[k])(float(a.split("=", 1)[1]))
+            own[k] = type(own[k])(float(v)) if isinstance(own[k], (int, float)) else v
         else:
             rest.append(a)
-    target, n_eval = own["target"], own["eval_episodes"]
     config = next((a for a in rest if a.startswith("config=")), f"config={os.path.join(HERE, '..', 'configs', 'hopper.yaml')}")
-    cfg = config_lib.load(TrainConfig, [config, *(a for a in rest if not a.startswith("config="))])
+    return own, config_lib.load(TrainConfig, [config, *(a for a in rest if not a.startswith("config="))])
+
+
+def main(argv):
+    own, cfg = load_args(argv, {"target": 2500.0, "eval_episodes": 128})
+    target, n_eval = own["target"], own["eval_episodes"]
     t0 = time.time()
     out = train(cfg)
     wall = time.time() - t0

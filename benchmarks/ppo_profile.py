@@ -28,14 +28,13 @@ import time
 import jax
 import jax.numpy as jnp
 
-from sim2real import config as config_lib
 from sim2real.envs import make
 from sim2real.envs.autoreset import step_autoreset
-from sim2real.rl import gae as gae_lib
 from sim2real.rl.rollout import collect, to_ctrl
 from sim2real.train import TrainConfig, build_algo, make_chunk
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from hopper_ppo import load_args  # noqa: E402  (the same key=value + config= handling)
 
 
 def best_of(fn, arg, repeats=3):
@@ -74,8 +73,7 @@ def profile(cfg: TrainConfig, seeds: int) -> dict:
 
     collect_fn = jax.jit(jax.vmap(col))
     batch = collect_fn(state)[1]
-    gae_fn = jax.jit(jax.vmap(lambda b: gae_lib.gae(b.reward * cfg.ppo.reward_scale, b.value, b.next_value,
-                                                     b.terminated, b.truncated, cfg.ppo.gamma, cfg.ppo.gae_lambda)))
+    gae_fn = jax.jit(jax.vmap(ppo.advantages))
     learn_fn = jax.jit(jax.vmap(lambda sb: ppo.learn(sb[0], sb[1], sb[0].key)))
     k = cfg.updates_per_chunk
     chunk = make_chunk(algo, k)
@@ -100,16 +98,7 @@ def profile(cfg: TrainConfig, seeds: int) -> dict:
 
 
 def main(argv):
-    own = {"seeds": "1,5", "out": ""}
-    rest = []
-    for a in argv:
-        key = a.split("=", 1)[0]
-        if key in own:
-            own[key] = a.split("=", 1)[1]
-        else:
-            rest.append(a)
-    config = next((a for a in rest if a.startswith("config=")), f"config={os.path.join(HERE, '..', 'configs', 'hopper.yaml')}")
-    cfg = config_lib.load(TrainConfig, [config, *(a for a in rest if not a.startswith("config="))])
+    own, cfg = load_args(argv, {"seeds": "1,5", "out": ""})
     rows = []
     for s in own["seeds"].split(","):  # each row printed and saved as soon as it is measured
         r = profile(cfg, int(s))

@@ -155,11 +155,16 @@ class PPO:
         )
         return st, metrics
 
+    def advantages(self, batch: Batch):
+        """GAE advantages and returns ``[T, B]`` of a collected batch (rewards scaled first)."""
+        cfg = self.cfg
+        return gae_lib.gae(batch.reward * cfg.reward_scale, batch.value, batch.next_value,
+                           batch.terminated, batch.truncated, cfg.gamma, cfg.gae_lambda)
+
     def learn(self, st: PPOState, batch: Batch, key):
         """Epochs x minibatches of clipped-surrogate updates on a collected ``[T, B]`` batch."""
         cfg = self.cfg
-        adv, ret = gae_lib.gae(batch.reward * cfg.reward_scale, batch.value, batch.next_value,
-                               batch.terminated, batch.truncated, cfg.gamma, cfg.gae_lambda)
+        adv, ret = self.advantages(batch)
         recurrent = cfg.net.kind == "lstm"
         T, B = batch.first.shape
         total = T * B
