@@ -209,3 +209,41 @@ def test_fitted_xml_scales_the_gain_law_as_the_simulator_does(tmp_path):
     assert fitted.actuator_gainprm[1, 0] == pytest.approx(2.0 * declared.actuator_gainprm[1, 0])
     assert fitted.actuator_biasprm[1, 1] == pytest.approx(2.0 * declared.actuator_biasprm[1, 1])  # -kp follows kp
     assert fitted.actuator_biasprm[1, 2] == pytest.approx(3.0 * declared.actuator_biasprm[1, 2])
+
+
+def test_physics_step_is_coarsened_only_while_it_predicts_the_same(tmp_path):
+    """A pendulum modelled at 0.25 ms and logged at 100 Hz: ``choose_substeps`` keeps a coarser
+    step (fewer than the model's 40 per sample) whose native predictions match the model's own
+    step's, and the coarser step it keeps is still within a tenth of the weighting scale."""
+    from sim2real.sysid.diagnose import _native_runs, choose_substeps
+    from sim2real.sysid.system import System
+    from sim2real.sysid.trajectory import from_recording, signal_scale
+
+    xml = tmp_path / "p.xml"
+    text = open(PENDULUM).read()
+    assert 'timestep="0.01"' in text
+    xml.write_text(text.replace('timestep="0.01"', 'timestep="0.00025"'))
+    case = Case("pendulum", "none", "", (), noise=1e-3, seed=1)
+    path = str(tmp_path / "r.csv")
+    record(case, path)
+    rec = load(path, _model())
+    system = System(str(xml), dt=rec.dt)
+    trajs = [from_recording(rec, system)]
+    n = choose_substeps(system, trajs)
+    assert n < system.substeps
+    steps = max(5, int(round(0.3 / rec.dt)))
+    own = _native_runs(system, trajs, steps, steps, substeps=system.substeps)
+    coarse = _native_runs(system, trajs, steps, steps, substeps=n)
+    scale = signal_scale([trajs[0].sigma_q], trajs[0].q)
+    assert np.sqrt(np.nanmean(((coarse - own) / scale) ** 2)) < 0.1
+
+
+def test_an_effect_fitted_at_its_absent_value_is_not_an_effect():
+    """``Candidate.is_off``: zero friction (or delay, payload ...) and a saturation at the top of its
+    range are the effect's absence; the selection never names such a fit."""
+    from sim2real.sysid.candidates import Candidate
+
+    coul = Candidate("coulomb_friction", "j", ("coulomb:j",), ((0.1,),), (0.2,), ((0.0, 2.0),))
+    assert coul.is_off(0.0) and coul.is_off(1e-5) and not coul.is_off(0.01)
+    sat = Candidate("actuator_saturation", "m", ("saturation:m",), ((1.0,),), (1.0,), ((0.1, 10.0),))
+    assert sat.is_off(9.9) and not sat.is_off(5.0)

@@ -59,6 +59,14 @@ class Candidate:
     def scale_of(self, name: str) -> float:
         return self.scales[self.params.index(name)]
 
+    def is_off(self, v: float) -> bool:
+        """The fitted first parameter ``v`` is the effect's own "absent" value (zero friction,
+        delay, payload, ...; a saturation at the top of its range): a fit that ends there gained
+        nothing from the effect, only from the other parameters it re-fitted."""
+        if self.effect == "actuator_saturation":
+            return v >= 0.98 * self.search[0][1]
+        return abs(v) <= 1e-3 * self.scales[0]
+
     def widen(self) -> "Candidate":
         """The same candidate with its (first parameter's) range and grid pushed past the edge."""
         lo, hi = self.search[0]

@@ -42,6 +42,7 @@ class Model:
     result: Result
     val: np.ndarray         # per validation segment objective (velocities refined)
     params: list            # every free parameter's name
+    refined: bool = False   # re-fitted from a better start found by a trial (``_absent_effect_gain``)
 
     @property
     def z(self):
@@ -119,6 +120,7 @@ class Selector:
         self.spec = sh.sys.spec
         self.progress = progress or (lambda text: None)
         self.rounds: list[list[Trial]] = []
+        self.refits: list[str] = []     # models re-fitted from a better start (``_absent_effect_gain``)
 
     # ------------------------------------------------------------------------------------------
     def _scales(self, effects) -> dict:
@@ -294,6 +296,34 @@ class Selector:
                                        f"a level per direction: validation error {ratio:.3f} of the symmetric fit's")
         return trial
 
+    def _absent_effect_gain(self, M: Model, tried: list[Trial]) -> Model | None:
+        """A trial whose effect was fitted at its absent value (``Candidate.is_off``) cannot name
+        it: its gain is the other parameters', a better optimum of ``M``'s own hypothesis that
+        the fit of ``M`` missed. Such trials fail; the best of them that beats ``M`` on the
+        fitting and validation data is re-fitted without the effect and returned (once per
+        model: a refit is not searched again)."""
+        best = None
+        for t in tried:
+            c = t.candidate
+            if t.model is None or not c.is_off(float(t.model.z[self.spec.index(c.params[0])])):
+                continue
+            t.passed = False
+            t.note = (t.note + "; " if t.note else "") + "fitted at its absent value: the gain is the other parameters'"
+            if (not M.refined and t.model.result.phi < M.result.phi
+                    and np.sum(t.model.val) < np.sum(M.val) and (best is None or np.sum(t.model.val) < np.sum(best.val))):
+                best = t.model
+        if best is None:
+            return None
+        R = self.fit(M.effects, best.z.copy(), best.result.v0)
+        self.validate([R])
+        if not (R.result.phi < M.result.phi and np.sum(R.val) < np.sum(M.val)):
+            return None
+        R.refined = True
+        self.refits.append(f"{M.label} was re-fitted from the start a trial found (validation error "
+                           f"{np.sum(R.val) / np.sum(M.val):.3f} of the first fit's)")
+        self.progress(f"{M.label} re-fitted from a better start")
+        return R
+
     def run(self) -> tuple[Model, list[Model]]:
         """Forward selection; returns the final model and the models after each step (``none`` first)."""
         self.progress("re-fitting the nominal parameters (none)")
@@ -309,6 +339,11 @@ class Selector:
                 tried.append(self._try(M, tr))
             self._judge_all(M, tried)
             self.rounds.append(trials)
+            better = self._absent_effect_gain(M, tried)
+            if better is not None:  # the same hypothesis, fitted better: the round again from there
+                self.rounds.pop()
+                M = steps[-1] = better
+                continue
             passed = [t for t in tried if t.passed]
             if not passed:
                 break
