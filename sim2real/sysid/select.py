@@ -324,6 +324,44 @@ class Selector:
         self.progress(f"{M.label} re-fitted from a better start")
         return R
 
+    def _pair(self, M: Model, tried: list[Trial]) -> tuple[Trial, Trial] | None:
+        """When no single effect passes but one lowers the validation error (not consistently
+        enough: a saturation that fixes the segments where it bites and costs where a missing
+        delay matters), it is fitted together with each other of the best three fitted ones; the pair joins the model if it passes
+        the same test against ``M`` and lowers the validation error by ``min_gain`` below each
+        of its members alone. Returns ``(first, second)``: the first's single fit and the pair
+        as the second's trial, or None. At most the three most promising pairs are fitted."""
+        c = self.cfg
+        good = sorted([t for t in tried if t.model is not None and t.model.result.phi < M.result.phi],
+                      key=lambda t: t.val_ratio)[:3]
+        if not good or good[0].val_ratio > 1 - c.min_gain:
+            return None
+        level = self.level(M)
+        best = None
+        for i in range(len(good)):
+            for j in range(i + 1, len(good)):
+                a, b = good[i], good[j]
+                if a.candidate.label == b.candidate.label:
+                    continue
+                self.progress(f"fitting {a.candidate.label} and {b.candidate.label} together on top of {M.label}")
+                z0 = a.model.z.copy()
+                z0[self.spec.indices(list(b.candidate.params))] = b.model.z[self.spec.indices(list(b.candidate.params))]
+                P = self.fit(M.effects + [a.candidate, b.candidate], z0, a.model.result.v0)
+                self.validate([P])
+                ratio, t = self.judge(M, P)
+                alone = min(np.sum(a.model.val), np.sum(b.model.val))
+                if (self._passes(ratio, t, level) and P.result.phi < M.result.phi
+                        and np.sum(P.val) <= (1 - c.min_gain) * alone
+                        and not any(x.candidate.is_off(float(P.z[self.spec.index(x.candidate.params[0])])) for x in (a, b))
+                        and (best is None or np.sum(P.val) < np.sum(best[2].val))):
+                    best = (a, b, P, ratio, t)
+        if best is None:
+            return None
+        a, b, P, ratio, t = best
+        second = Trial(b.candidate, b.score, P, ratio, t, True, level,
+                       note=f"fitted together with {a.candidate.label}: neither passed alone")
+        return a, second
+
     def run(self) -> tuple[Model, list[Model]]:
         """Forward selection; returns the final model and the models after each step (``none`` first)."""
         self.progress("re-fitting the nominal parameters (none)")
@@ -345,6 +383,17 @@ class Selector:
                 M = steps[-1] = better
                 continue
             passed = [t for t in tried if t.passed]
+            if not passed and len(M.effects) + 2 <= self.cfg.max_effects:
+                pair = self._pair(M, tried)
+                if pair is not None:  # two effects that only together explain the data
+                    first, second = pair
+                    steps.append(first.model)
+                    self.rounds.append([second])
+                    M = second.model
+                    steps.append(M)
+                    done = {first.candidate.label, second.candidate.label}
+                    remaining = [c for c in remaining if c.label not in done]
+                    continue
             if not passed:
                 break
             best = min(passed, key=lambda t: np.sum(t.model.val))
