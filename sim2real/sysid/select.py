@@ -16,6 +16,11 @@ Forward selection on the simulation error (``fit.py``):
    significant (paired t over the segments >= ``min_t``, ``Selector.judge``). The best passing one joins the model.
 4. Repeat from 2 until nothing passes (or ``max_effects``).
 
+A fit whose effect ends at its absent value (``Candidate.is_off``) never names it: its gain is a
+better fit of the current hypothesis, which replaces the current model before the round runs
+again. When no single effect passes but one lowers the validation error, it is fitted together
+with each of the next best (``_pair``): two effects that only together explain the data.
+
 A Coulomb friction that passes is then tried with a level per direction (``coulomb_asym``),
 kept by the same test. A fit whose effect parameter ends at the edge of its search range is
 widened once and fitted again.
