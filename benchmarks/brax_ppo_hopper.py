@@ -35,12 +35,9 @@ def main(argv):
     from brax.training.agents.ppo import networks as ppo_networks
     from brax.training.agents.ppo import train as ppo
 
-    args = dict(DEFAULTS)
-    for a in argv:
-        k, v = a.split("=", 1)
-        if k not in args:
-            raise SystemExit(f"unknown argument {k}; known: {sorted(args)}")
-        args[k] = type(DEFAULTS[k])(float(v)) if isinstance(DEFAULTS[k], (int, float)) else v
+    from sim2real.config import script_args
+
+    args = script_args(argv, DEFAULTS)
     env = envs.get_environment("hopper", backend="mjx")
     # env steps per update = batch_size * num_minibatches * unroll_length = num_envs * unroll_length
     batch_size = args["num_envs"] // args["num_minibatches"]

@@ -33,13 +33,7 @@ def load_args(argv, own: dict):
     """``key=value`` arguments -> ``(own, cfg)``: the script's ``own`` keys (converted to the
     type of their default) and the ``TrainConfig`` from the rest (``config=`` default:
     ``configs/hopper.yaml``)."""
-    own, rest = dict(own), []
-    for a in argv:
-        k, _, v = a.partition("=")
-        if k in own:
-            own[k] = type(own[k])(float(v)) if isinstance(own[k], (int, float)) else v
-        else:
-            rest.append(a)
+    own, rest = config_lib.split_args(argv, own)
     config = next((a for a in rest if a.startswith("config=")), f"config={os.path.join(HERE, '..', 'configs', 'hopper.yaml')}")
     return own, config_lib.load(TrainConfig, [config, *(a for a in rest if not a.startswith("config="))])
 

@@ -30,24 +30,18 @@ def main(argv):
     from sim2real.progress import Bar
     from sim2real.train import load_policy, load_run
 
-    _, args = config_lib.parse_args(argv)
-    known = {"run", "x", "y", "episodes", "out", "seed", "adapt", "progress"}
-    for k in args:
-        if k not in known:
-            raise config_lib.ConfigError(f"unknown argument '{k}'; arguments: {', '.join(sorted(known))}")
-    if "run" not in args or "x" not in args:
+    args = config_lib.script_args(argv, {"run": "", "x": "", "y": "", "episodes": 4, "out": "", "seed": 123,
+                                         "adapt": False, "progress": True})
+    if not args["run"] or not args["x"]:
         raise config_lib.ConfigError("evaluate needs run=RUN_DIR and x=name=low:high:count")
-    run = str(args["run"])
+    run = args["run"]
     if not os.path.isdir(run) or not os.path.exists(os.path.join(run, "config.yaml")):
         raise FileNotFoundError(f"run={run}: not a run folder (no config.yaml)")
-    n_ep = args.get("episodes", 4)
-    if isinstance(n_ep, bool) or not isinstance(n_ep, int) or n_ep < 1:
+    n_ep, seed = args["episodes"], args["seed"]
+    if n_ep < 1:
         raise config_lib.ConfigError(f"episodes={n_ep!r}: must be a positive integer")
-    seed = args.get("seed", 123)
-    if isinstance(seed, bool) or not isinstance(seed, int):
-        raise config_lib.ConfigError(f"seed={seed!r}: must be an integer")
-    axes = dict([parse_axis(str(args["x"]))] + ([parse_axis(str(args["y"]))] if "y" in args else []))
-    out = str(args.get("out", os.path.join(run, "eval")))
+    axes = dict([parse_axis(args["x"])] + ([parse_axis(args["y"])] if args["y"] else []))
+    out = args["out"] or os.path.join(run, "eval")
     output.check(out, "evaluation", inputs=[os.path.join(run, "config.yaml")], overwrite=True)
     if os.path.isdir(os.path.join(run, "checkpoints")):
         cfg, env, algo, state = load_run(run)
@@ -58,7 +52,7 @@ def main(argv):
         env.spec.index(n)  # an unknown name lists the known ones
     zs, names = grid(env, axes, base=algo.space.base if hasattr(algo, "space") else None)
     env.check_z(zs)
-    adapt = bool(args.get("adapt", False))
+    adapt = args["adapt"]
     if adapt and not hasattr(algo, "adapt"):
         raise config_lib.ConfigError(f"adapt=true needs an algorithm with an adaptation operator "
                                      f"(es_maml); run '{args['run']}' trained algo '{cfg.algo}'")
@@ -73,7 +67,7 @@ def main(argv):
     adapted = jax.jit(jax.vmap(cell_adapted, in_axes=(None, None, 0, None)))
     rets, before = [], []
     label = f"{len(zs)} physics x {n_ep} episodes" + (", adapted first" if adapt else "")
-    with Bar(bool(args.get("progress", True)), cfg.num_seeds * (1 + adapt), label) as bar:
+    with Bar(args["progress"], cfg.num_seeds * (1 + adapt), label) as bar:
         for s in range(cfg.num_seeds):
             params, stats = jax.tree_util.tree_map(lambda x: x[s], (all_params, all_stats))
             before.append(np.asarray(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"]).mean(1))

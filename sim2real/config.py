@@ -179,6 +179,54 @@ def parse_args(argv: list[str]) -> tuple[str | None, dict[str, Any]]:
     return path, overrides
 
 
+def split_args(argv: list[str], defaults: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
+    """A script's own ``key=value`` arguments, apart from the rest (``argv`` entries, for ``load``).
+
+    Returns ``(own, rest)``: ``own`` is ``defaults`` updated by the arguments whose key it has,
+    each converted to its default's type (an int default takes ``1e6``-style numbers, a string
+    default takes the text as written); an argument that is not ``key=value`` or whose value does
+    not convert raises ``ConfigError`` naming the key.
+    """
+    own, rest = dict(defaults), []
+    for a in argv:
+        if "=" not in a:
+            raise ConfigError(f"argument '{a}' is not of the form key=value")
+        k, v = a.split("=", 1)
+        k = k.strip().lstrip("-")
+        if k not in defaults:
+            rest.append(a)
+            continue
+        kind = type(defaults[k])
+        try:
+            if kind is bool:
+                val = yaml.safe_load(v)
+                if not isinstance(val, bool):
+                    raise ValueError
+                own[k] = val
+            elif kind is int:
+                f = float(v)
+                if f != int(f):
+                    raise ValueError
+                own[k] = int(f)
+            elif kind is float:
+                own[k] = float(v)
+            else:
+                own[k] = v
+        except (ValueError, OverflowError):
+            raise ConfigError(f"{k}={v!r}: must be {kind.__name__} (default {defaults[k]!r})") from None
+    return own, rest
+
+
+def script_args(argv: list[str], defaults: dict[str, Any]) -> dict[str, Any]:
+    """A script's ``key=value`` arguments over ``defaults`` (``split_args``); an unknown key raises
+    ``ConfigError`` listing the known ones."""
+    own, rest = split_args(argv, defaults)
+    if rest:
+        k = rest[0].split("=", 1)[0]
+        raise ConfigError(f"unknown argument '{k}'; arguments: {', '.join(sorted(defaults))}")
+    return own
+
+
 def load(cls, argv: list[str]):
     """Config of type ``cls`` from ``config=PATH`` (YAML) and ``key=value`` overrides."""
     path, overrides = parse_args(argv)

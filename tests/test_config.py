@@ -94,3 +94,21 @@ def test_progress_bar_closes_and_can_be_disabled():
     off.step(2, "nothing drawn")
     off.close()
     assert not hasattr(off, "p")
+
+
+def test_script_args_convert_to_the_defaults_types_and_name_bad_keys():
+    from sim2real.config import ConfigError, script_args, split_args
+
+    d = {"steps": 100, "rate": 0.5, "out": "", "plot": False}
+    got = script_args(["steps=2e3", "rate=1", "out=a=b", "plot=true"], d)
+    assert got == {"steps": 2000, "rate": 1.0, "out": "a=b", "plot": True}
+    assert d["steps"] == 100  # the defaults are not changed
+    own, rest = split_args(["steps=5", "ppo.lr=1e-3"], d)
+    assert own["steps"] == 5 and rest == ["ppo.lr=1e-3"]
+    for bad, match in ((["stepz=3"], "unknown argument 'stepz'; arguments: out, plot, rate, steps"),
+                       (["steps=2.5"], "steps='2.5': must be int"),
+                       (["rate=fast"], "rate='fast': must be float"),
+                       (["plot=maybe"], "plot='maybe': must be bool"),
+                       (["steps"], "not of the form key=value")):
+        with pytest.raises(ConfigError, match=match):
+            script_args(bad, d)
