@@ -57,7 +57,8 @@ class DiagnoseConfig:
       num_windows: time windows per recording when locating the mismatch.
       coulomb_eps: velocity scale of the smooth Coulomb model (joint units / s).
       min_gain: an effect must lower the validation error by this fraction ...
-      min_t: ... with a paired t-statistic over validation segments at least this large ...
+      min_t: ... with a paired t-statistic over validation segments at least this large
+        (``min_t_next`` for an effect after the first) ...
       floor_level: ... on a model that misfits the validation data by more than this (its
         objective per residual, in units of each signal's noise and precision) ...
       strong: ... unless the effect's validation ratio is this low or lower.
@@ -83,6 +84,7 @@ class DiagnoseConfig:
     # the selection's thresholds: tuned once, stated once (``select.SelectConfig``)
     min_gain: float = SelectConfig.min_gain
     min_t: float = SelectConfig.min_t
+    min_t_next: float = SelectConfig.min_t_next
     floor_level: float = SelectConfig.floor_level
     strong: float = SelectConfig.strong
     top: int = SelectConfig.top
@@ -97,7 +99,7 @@ class DiagnoseConfig:
             raise ValueError("model=PATH.xml is required")
         if not self.recordings:
             raise ValueError("recordings=[a.csv,...] is required")
-        for key in ("window_seconds", "horizon_seconds", "coulomb_eps", "min_gain", "min_t", "tie_tolerance",
+        for key in ("window_seconds", "horizon_seconds", "coulomb_eps", "min_gain", "min_t", "min_t_next", "tie_tolerance",
                     "floor_level", "strong"):
             v = getattr(self, key)
             if not math.isfinite(v) or v < 0:
@@ -291,7 +293,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         cands = library(system, sc, tuple(cfg.effects))
         bar.step(text="fitting")
         sel = Selector(fitter, system.nominal, cands,
-                       SelectConfig(cfg.min_gain, cfg.min_t, cfg.floor_level, cfg.strong, cfg.top, cfg.max_effects),
+                       SelectConfig(cfg.min_gain, cfg.min_t, cfg.floor_level, cfg.strong, cfg.top, cfg.max_effects,
+                                    min_t_next=cfg.min_t_next),
                        progress=lambda text: bar.step(0, text))
         final, steps = sel.run()
         bar.step(text="checking on held-out data")
