@@ -57,8 +57,7 @@ class DiagnoseConfig:
       num_windows: time windows per recording when locating the mismatch.
       coulomb_eps: velocity scale of the smooth Coulomb model (joint units / s).
       min_gain: an effect must lower the validation error by this fraction ...
-      min_t: ... with a paired t-statistic over validation segments at least this large
-        (``min_t_next`` for an effect after the first) ...
+      min_t: ... with a paired t-statistic over validation segments at least this large ...
       floor_level: ... on a model that misfits the validation data by more than this (its
         objective per residual, in units of each signal's noise and precision) ...
       strong: ... unless the effect's validation ratio is this low or lower.
@@ -84,7 +83,6 @@ class DiagnoseConfig:
     # the selection's thresholds: tuned once, stated once (``select.SelectConfig``)
     min_gain: float = SelectConfig.min_gain
     min_t: float = SelectConfig.min_t
-    min_t_next: float = SelectConfig.min_t_next
     floor_level: float = SelectConfig.floor_level
     strong: float = SelectConfig.strong
     top: int = SelectConfig.top
@@ -99,7 +97,7 @@ class DiagnoseConfig:
             raise ValueError("model=PATH.xml is required")
         if not self.recordings:
             raise ValueError("recordings=[a.csv,...] is required")
-        for key in ("window_seconds", "horizon_seconds", "coulomb_eps", "min_gain", "min_t", "min_t_next", "tie_tolerance",
+        for key in ("window_seconds", "horizon_seconds", "coulomb_eps", "min_gain", "min_t", "tie_tolerance",
                     "floor_level", "strong"):
             v = getattr(self, key)
             if not math.isfinite(v) or v < 0:
@@ -172,11 +170,12 @@ def _native_runs(system: System, trajs, n: int, steps: int, starts: int = 3, sub
 def choose_substeps(system: System, trajs, max_substeps: int = 64, seconds: float = 0.3) -> int:
     """Physics steps per sample from the data: the model's own step, halved while halving it still
     changes the nominal model's predictions by more than a third of the scale each signal is
-    weighted with (its noise, at least 1% of its spread), else doubled while doubling it changes
-    them by less than a tenth of that. Discretisation error is not physics; a step that is not
-    converged would have the diagnosis name an effect for it (a damping that makes up for the
-    integrator's, a lag for its phase error). A step finer than the data can tell apart only
-    costs simulation that longer predictions could use (``choose_horizon``'s budget)."""
+    weighted with (its noise, at least 1% of its spread); if the model's own step needs no
+    halving, doubled while the doubled step's predictions stay within a tenth of that scale of the
+    own step's. Discretisation error is not physics; a step that is not converged would have the
+    diagnosis name an effect for it (a damping that makes up for the integrator's, a lag for its
+    phase error). A step finer than the data can tell apart only costs simulation that longer
+    predictions could use (``choose_horizon``'s budget)."""
     n = system.substeps
     steps = max(5, int(round(seconds / trajs[0].dt)))
     scale = signal_scale([t.sigma_q for t in trajs], np.concatenate([t.q for t in trajs])) + 1e-12
@@ -186,19 +185,15 @@ def choose_substeps(system: System, trajs, max_substeps: int = 64, seconds: floa
             return np.sqrt(np.nanmean(((a - b) / scale) ** 2))
 
     own = prev = _native_runs(system, trajs, steps, steps, substeps=n)
-    refined = False
     while 2 * n <= max_substeps:
         fine = _native_runs(system, trajs, steps, steps, substeps=2 * n)
         if not differ(fine, prev) > 1 / 3:  # (NaN: both diverged alike; nothing finer would help)
             break
-        n, prev, refined = 2 * n, fine, True
-    if refined:
+        n, prev = 2 * n, fine
+    if n != system.substeps:
         return n
     # the model's own step is converged: coarser ones, while they predict what it predicts
-    while n % 2 == 0 and n > 1:
-        coarse = _native_runs(system, trajs, steps, steps, substeps=n // 2)
-        if not differ(coarse, own) < 0.1:
-            break
+    while n % 2 == 0 and differ(_native_runs(system, trajs, steps, steps, substeps=n // 2), own) < 0.1:
         n //= 2
     return n
 
@@ -293,8 +288,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         cands = library(system, sc, tuple(cfg.effects))
         bar.step(text="fitting")
         sel = Selector(fitter, system.nominal, cands,
-                       SelectConfig(cfg.min_gain, cfg.min_t, cfg.floor_level, cfg.strong, cfg.top, cfg.max_effects,
-                                    min_t_next=cfg.min_t_next),
+                       SelectConfig(cfg.min_gain, cfg.min_t, cfg.floor_level, cfg.strong, cfg.top, cfg.max_effects),
                        progress=lambda text: bar.step(0, text))
         final, steps = sel.run()
         bar.step(text="checking on held-out data")

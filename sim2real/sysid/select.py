@@ -88,10 +88,6 @@ class SelectConfig:
       strong: a validation ratio at or below this passes whatever the misfit level.
       top: candidates fitted per round; max_effects: effects named at most;
       min_score: candidates scoring less in the screen are not fitted; iters: Gauss-Newton steps.
-      min_t_next: the t an effect after the first needs. 2.5 named two more single effects
-        exactly on the tuning half (no false second effect) but changed nothing on the test half
-        and lost the delay of the friction + delay case in ``tests/test_diagnosis.py``; it stays
-        at ``min_t`` (``tuning.md`` step 5).
     """
 
     min_gain: float = 0.05
@@ -102,7 +98,6 @@ class SelectConfig:
     max_effects: int = 3
     min_score: float = 0.01
     iters: int = 6
-    min_t_next: float = 2.0
 
 
 def _paired_t(d: np.ndarray) -> float:
@@ -258,10 +253,9 @@ class Selector:
         n = max(M.result.n / max(len(self.fit_tiles), 1), 1) * len(self.val_tiles)
         return float(np.sum(M.val) / n)
 
-    def _passes(self, ratio, t, level=float("inf"), later: bool = False) -> bool:
+    def _passes(self, ratio, t, level=float("inf")) -> bool:
         c = self.cfg
-        return (ratio <= 1 - c.min_gain and t >= (c.min_t_next if later else c.min_t)
-                and (level > c.floor_level or ratio <= c.strong))
+        return ratio <= 1 - c.min_gain and t >= c.min_t and (level > c.floor_level or ratio <= c.strong)
 
     def _try(self, M: Model, trial: Trial) -> Trial:
         """Fit the candidate on top of ``M`` (validation comes later, batched: ``_judge_all``)."""
@@ -289,7 +283,7 @@ class Selector:
         for t in trials:
             t.val_ratio, t.t = self.judge(M, t.model)
             t.base_level = level
-            t.passed = self._passes(t.val_ratio, t.t, level, later=bool(M.effects)) and t.model.result.phi < M.result.phi
+            t.passed = self._passes(t.val_ratio, t.t, level) and t.model.result.phi < M.result.phi
 
     def _asymmetry(self, M: Model, trial: Trial) -> Trial:
         """Coulomb friction with a level per direction, kept if it passes against the symmetric fit."""
@@ -308,6 +302,10 @@ class Selector:
                                        f"a level per direction: validation error {ratio:.3f} of the symmetric fit's")
         return trial
 
+    def _absent(self, c: Candidate, M: Model) -> bool:
+        """``c`` ended at its absent value in the fitted model ``M`` (``Candidate.is_off``)."""
+        return c.is_off(float(M.z[self.spec.index(c.params[0])]))
+
     def _absent_effect_gain(self, M: Model, tried: list[Trial]) -> Model | None:
         """A trial whose effect was fitted at its absent value (``Candidate.is_off``) cannot name
         it: its gain is the other parameters', a better optimum of ``M``'s own hypothesis that
@@ -317,7 +315,7 @@ class Selector:
         best = None
         for t in tried:
             c = t.candidate
-            if t.model is None or not c.is_off(float(t.model.z[self.spec.index(c.params[0])])):
+            if t.model is None or not self._absent(c, t.model):
                 continue
             t.passed = False
             t.note = (t.note + "; " if t.note else "") + "fitted at its absent value: the gain is the other parameters'"
@@ -339,12 +337,13 @@ class Selector:
     def _pair(self, M: Model, tried: list[Trial]) -> tuple[Trial, Trial] | None:
         """When no single effect passes but one lowers the validation error (not consistently
         enough: a saturation that fixes the segments where it bites and costs where a missing
-        delay matters), it is fitted together with each other of the best three fitted ones; the pair joins the model if it passes
-        the same test against ``M`` and lowers the validation error by ``min_gain`` below each
-        of its members alone. Only on the nominal model: on top of a named effect the data are
-        mostly explained, and three more pairs tested on the same validation segments would
-        name a false pair (tuning half: a stiffness + backlash beside a saturation). Returns ``(first, second)``: the first's single fit and the pair
-        as the second's trial, or None. At most the three most promising pairs are fitted."""
+        delay matters), it is fitted together with each other of the best three fitted ones; the
+        pair joins the model if it passes the same test against ``M`` and lowers the validation
+        error by ``min_gain`` below each of its members alone. Only on the nominal model: on top
+        of a named effect the data are mostly explained, and three more pairs tested on the same
+        validation segments would name a false pair (tuning half: a stiffness + backlash beside a
+        saturation). Returns ``(first, second)``: the first's single fit and the pair as the
+        second's trial, or None."""
         c = self.cfg
         good = sorted([t for t in tried if t.model is not None and t.model.result.phi < M.result.phi],
                       key=lambda t: t.val_ratio)[:3]
@@ -364,9 +363,9 @@ class Selector:
                 self.validate([P])
                 ratio, t = self.judge(M, P)
                 alone = min(np.sum(a.model.val), np.sum(b.model.val))
-                if (self._passes(ratio, t, level, later=bool(M.effects)) and P.result.phi < M.result.phi
+                if (self._passes(ratio, t, level) and P.result.phi < M.result.phi
                         and np.sum(P.val) <= (1 - c.min_gain) * alone
-                        and not any(x.candidate.is_off(float(P.z[self.spec.index(x.candidate.params[0])])) for x in (a, b))
+                        and not any(self._absent(x.candidate, P) for x in (a, b))
                         and (best is None or np.sum(P.val) < np.sum(best[2].val))):
                     best = (a, b, P, ratio, t)
         if best is None:
