@@ -240,6 +240,10 @@ def train(cfg: TrainConfig) -> dict:
     if cfg.ppo.split_envs:  # (on a GPU host the CPU device count changes nothing)
         _use_cpu_cores()
     env = make(cfg.env, **cfg.env_options)
+    if not cfg.resume:  # (a resumed run's config.yaml holds the resolved box already)
+        from sim2real.algos import from_diagnosis
+
+        cfg = dataclasses.replace(cfg, dr=from_diagnosis.resolve(cfg.dr, env))
     algo = build_algo(_without_warm_start(cfg) if cfg.resume else cfg, env)  # resume: the checkpoint is the start
     run = Run(cfg)
     run.check()
@@ -436,8 +440,21 @@ def _without_warm_start(cfg: TrainConfig) -> TrainConfig:
 
 
 def _rebuild(run_dir: str):
-    """``(cfg, env, algo)`` of a saved run, from its ``config.yaml`` (without its warm start)."""
-    cfg = config_lib.load(TrainConfig, [f"config={os.path.join(run_dir, 'config.yaml')}"])
+    """``(cfg, env, algo)`` of a saved run, from its ``config.yaml`` (without its warm start); a
+    SimOpt run folder (its config has ``simopt``) gives its ``SimOptRunConfig`` and ``SimOpt``."""
+    path = os.path.join(run_dir, "config.yaml")
+    if os.path.exists(path):
+        import yaml
+
+        with open(path) as f:
+            saved = yaml.safe_load(f) or {}
+        if isinstance(saved, dict) and "simopt" in saved:
+            from sim2real.simopt_run import SimOptRunConfig, build
+
+            cfg = config_lib.load(SimOptRunConfig, [f"config={path}"])
+            env, so, _ = build(cfg)
+            return cfg, env, so
+    cfg = config_lib.load(TrainConfig, [f"config={path}"])
     env = make(cfg.env, **cfg.env_options)
     return cfg, env, build_algo(_without_warm_start(cfg), env)
 

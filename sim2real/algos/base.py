@@ -20,12 +20,18 @@ class DRConfig:
       low, high: box bounds, one per name (may reach past the physical bounds: values are
         clipped to them in the simulator, see README "bounds rule").
       fixed: name -> value for parameters held at a non-default value.
+      from_diagnosis: a diagnosis folder of the env's own model: its fitted physics becomes the
+        env's, randomised over +- ``diagnosis_k`` std (``algos/from_diagnosis.py``; resolved into
+        ``params``/``low``/``high``/``fixed`` when training starts).
+      diagnosis_k: half-width of that box in standard deviations of the fit.
     """
 
     params: tuple[str, ...] = ()
     low: tuple[float, ...] = ()
     high: tuple[float, ...] = ()
     fixed: dict[str, float] = dataclasses.field(default_factory=dict)
+    from_diagnosis: str = ""
+    diagnosis_k: float = 2.0
 
 
 class DRSpace:

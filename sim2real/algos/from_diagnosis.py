@@ -1,0 +1,135 @@
+"""A diagnosis as a training distribution: the fitted physics, and a box of +-k std around it.
+
+``dr.from_diagnosis=runs/diag`` (a diagnosis folder or its ``diagnosis.json``) turns what
+``scripts/diagnose.py`` found on the env's own model into the env's physics: every re-fitted
+nominal parameter and every parameter of the selected effects (the effect switched on) is set to
+its fitted value, and where the fit gave a standard deviation it is randomised over
+``value +- dr.diagnosis_k * std`` (clipped to the physical bounds). The diagnosis' names are the
+env's (both come from ``physics/catalog.py``) with two translations: the delay is in recording
+samples there and in control steps here, and a joint's declared damping is the env's
+``joint_damping`` where that parameter drives exactly that joint. What the user's ``dr`` already
+names wins. ``train`` resolves this once, before the run folder is written, so ``config.yaml``
+holds the resulting box and fixed values (and a resume reads them, not the diagnosis).
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+
+import mujoco
+import numpy as np
+
+from sim2real.algos.base import DRConfig
+from sim2real.config import ConfigError
+from sim2real.envs.base import Env
+
+# fitted alongside an effect but with no counterpart in the envs' physics (a payload's distance
+# along the link, the motor inertia crossing a backlash): an error when a selected effect has them
+_HELPERS = ("payload_r", "backlash_inertia")
+
+
+def load(path: str) -> dict:
+    """The ``diagnosis.json`` of a diagnosis folder (or the file itself)."""
+    f = os.path.join(path, "diagnosis.json") if os.path.isdir(path) else path
+    if not os.path.exists(f):
+        raise ConfigError(f"dr.from_diagnosis={path}: no diagnosis.json there (run scripts/diagnose.py first)")
+    try:
+        with open(f) as fh:
+            d = json.load(fh)
+    except json.JSONDecodeError as e:
+        raise ConfigError(f"dr.from_diagnosis: {f} is not valid JSON ({e})") from None
+    for key in ("model", "fitted_params", "selected", "nominal_refit", "sample_period"):
+        if key not in d:
+            raise ConfigError(f"dr.from_diagnosis: {f} has no '{key}' (not a diagnosis.json of this version)")
+    d["_path"] = f
+    return d
+
+
+def _names(m, obj, n):
+    return [mujoco.mj_id2name(m, obj, i) for i in range(n)]
+
+
+def check_same_model(d: dict, env: Env) -> None:
+    """The diagnosed model must be the env's: the same joints (names and types) and actuators."""
+    try:
+        m = mujoco.MjModel.from_xml_path(d["model"])
+    except Exception as e:
+        raise ConfigError(f"dr.from_diagnosis: the diagnosed model '{d['model']}' cannot be loaded ({e})") from None
+    em = env.mj_model
+    J, A = mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_ACTUATOR
+    mine = (_names(em, J, em.njnt), list(em.jnt_type), _names(em, A, em.nu))
+    theirs = (_names(m, J, m.njnt), list(m.jnt_type), _names(m, A, m.nu))
+    if mine != theirs:
+        raise ConfigError(f"dr.from_diagnosis: the diagnosed model '{d['model']}' is not env '{env.name}''s "
+                          f"(joints {theirs[0]}, actuators {theirs[2]}; the env has joints {mine[0]}, "
+                          f"actuators {mine[2]}); diagnose the env's own MJCF")
+
+
+def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
+    """``{env parameter: (fitted value, std)}`` (std NaN where the fit gave none)."""
+    check_same_model(d, env)
+    std = {n: r.get("std") for n, r in d["nominal_refit"].items()}
+    for s in d["selected"]:
+        std.update(s.get("std", {}))
+    selected_names = {n for s in d["selected"] for n in list(s.get("params", {})) + list(s.get("std", {}))}
+    em = env.mj_model
+    damping_dofs = list(env.joint_damping_dofs(em))
+    out, missing = {}, []
+    for name, value in d["fitted_params"].items():
+        sd = std.get(name)
+        sd = float("nan") if sd is None else float(sd)
+        kind, _, target = name.partition(":")
+        if kind in _HELPERS:
+            if name in selected_names:
+                missing.append(name)
+            continue
+        if name == "action_delay":  # samples of the recordings -> control steps of the env
+            scale = float(d["sample_period"]) / env.dt
+            value, sd = value * scale, sd * scale
+        elif kind == "damping":
+            j = mujoco.mj_name2id(em, mujoco.mjtObj.mjOBJ_JOINT, target)
+            if j >= 0 and damping_dofs == [int(em.jnt_dofadr[j])]:
+                name = "joint_damping"
+        if name not in env.spec:
+            if not math.isclose(value, _default_in_diagnosis(d, name), rel_tol=1e-9, abs_tol=1e-12):
+                missing.append(name)
+            continue
+        out[name] = (float(value), sd)
+    if missing:
+        raise ConfigError(f"dr.from_diagnosis={d['_path']}: fitted parameter(s) {', '.join(missing)} have no "
+                          f"counterpart in env '{env.name}''s physics (its parameters: {', '.join(env.spec.names)})")
+    return out
+
+
+def _default_in_diagnosis(d: dict, name: str) -> float:
+    r = d["nominal_refit"].get(name)
+    return float(r["nominal"]) if r else 0.0
+
+
+def resolve(dr: DRConfig, env: Env) -> DRConfig:
+    """``dr`` with the diagnosis' physics added (unchanged when ``dr.from_diagnosis`` is empty)."""
+    if not dr.from_diagnosis:
+        return dr
+    if not dr.diagnosis_k > 0:
+        raise ConfigError(f"dr.diagnosis_k={dr.diagnosis_k}: must be > 0 (the box is value +- k std)")
+    d = load(dr.from_diagnosis)
+    params, low, high = list(dr.params), list(dr.low), list(dr.high)
+    fixed = dict(dr.fixed)
+    for name, (value, sd) in env_values(d, env).items():
+        if name in params or name in fixed:  # the user's own setting wins
+            continue
+        p = env.spec[name]
+        if not p.low <= value <= p.high:
+            hint = " (raise env_options.max_delay)" if name == "action_delay" else ""
+            raise ConfigError(f"dr.from_diagnosis: fitted {name} = {value:g} {p.unit} is outside the env's bounds "
+                              f"[{p.low:g}, {p.high:g}]{hint}")
+        lo, hi = max(p.low, value - dr.diagnosis_k * sd), min(p.high, value + dr.diagnosis_k * sd)
+        if np.isfinite(sd) and hi - lo > 1e-6 * max(abs(value), 1e-6):
+            params.append(name)
+            low.append(float(lo))
+            high.append(float(hi))
+        else:  # no spread known (or none at all): the fitted value
+            fixed[name] = float(value)
+    return dataclasses.replace(dr, params=tuple(params), low=tuple(low), high=tuple(high), fixed=fixed)

@@ -1,0 +1,70 @@
+"""The sim-to-real loop: record the policy on the real system, diagnose, retrain on what was found.
+
+One iteration (``iteration``), in ``out/iter_<k>/``:
+
+1. ``recordings/``: ``episodes`` episodes of the current policy on the target (``record.from_run``);
+2. ``diagnosis/``: the env's own MJCF diagnosed on them (all but the last episode fit, the last
+   one held out: ``sysid.diagnose``);
+3. ``run/``: the training config retrained with ``dr.from_diagnosis`` = that diagnosis (the fitted
+   physics, randomised over +- k std: ``algos/from_diagnosis.py``).
+
+The training config is the same base for every iteration (each diagnosis replaces the last one's
+physics rather than adding to it); each diagnosis is of the real system, so what the first one
+missed the second may find in recordings of a policy that behaves differently.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+
+from sim2real import output
+from sim2real.envs.base import ASSETS
+from sim2real.train import TrainConfig
+
+
+def env_model_path(env) -> str:
+    """The env's own MJCF (what the diagnosis must describe for ``dr.from_diagnosis``)."""
+    return os.path.join(ASSETS, env.xml)
+
+
+def record_to(run_dir: str, target: str, folder: str, episodes: int, seed: int, run_seed: int = 0,
+              noise: float = 0.0, deterministic: bool = True) -> tuple[list[str], dict]:
+    """Record ``episodes`` of a run's policy on ``target`` into ``folder`` (made here)."""
+    from sim2real.record import from_run
+
+    rolls, what = from_run(run_dir, target, episodes, seed, run_seed, noise, deterministic)
+    with output.staged(folder, "recordings") as tmp:
+        rolls.write(tmp)
+        with open(os.path.join(tmp, "record.json"), "w") as f:
+            json.dump(what, f, indent=2)
+    return [os.path.join(folder, f"episode_{e:03d}.csv") for e in range(episodes)], what
+
+
+def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: int = 3, seed: int = 0,
+              run_seed: int = 0, noise: float = 0.0, deterministic: bool = True, diagnose_options=(),
+              progress: bool = False) -> dict:
+    """One loop iteration from the policy of ``run_dir`` (seed ``run_seed``); returns what it did
+    (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded episodes)."""
+    from sim2real import config as config_lib
+    from sim2real.envs import make
+    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
+    from sim2real.train import train
+
+    if episodes < 2:
+        raise config_lib.ConfigError(f"episodes={episodes}: the loop needs >= 2 (the last one is held out)")
+    env = make(base.env, **base.env_options)
+    paths, what = record_to(run_dir, target, os.path.join(out, "recordings"), episodes, seed, run_seed, noise,
+                            deterministic)
+    dcfg = config_lib.load(DiagnoseConfig, [f"model={env_model_path(env)}", f"recordings=[{','.join(paths[:-1])}]",
+                                            f"heldout=[{paths[-1]}]", f"out={os.path.join(out, 'diagnosis')}",
+                                            f"progress={str(progress).lower()}"] + list(diagnose_options))
+    d = diagnose(dcfg)
+    cfg = dataclasses.replace(base, name="run", out_dir=out, resume=False, overwrite=False, progress=progress,
+                              dr=dataclasses.replace(base.dr, from_diagnosis=os.path.join(out, "diagnosis")))
+    res = train(cfg)
+    return {"recordings": paths, "real_return": what["mean_return"], "run": res["run_dir"],
+            "diagnosis": {"answer": d["answer"],
+                          "selected": [{"effect": s["effect"], "target": s["target"], "params": s["params"]}
+                                       for s in d["selected"]],
+                          "fitted_params": d["fitted_params"], "heldout_nrmse": [d["fit"]["before"], d["fit"]["after"]]}}

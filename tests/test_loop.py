@@ -1,0 +1,177 @@
+"""The sim-to-real loop: recordings from a policy, a diagnosis as a training distribution, one
+iteration end to end on the pendulum."""
+import dataclasses
+import json
+import os
+
+import jax
+import numpy as np
+import pytest
+import yaml
+
+from sim2real import config as config_lib
+from sim2real.algos import from_diagnosis
+from sim2real.algos.base import DRConfig
+from sim2real.envs import make
+from sim2real.loop import env_model_path
+from sim2real.record import Rollouts, native, policy, simulated
+from sim2real.sysid import recordings as rec_lib
+from sim2real.train import TrainConfig, train
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PLANT = os.path.join(ROOT, "benchmarks", "plants", "pendulum_real.xml")
+SHORT = ["env_options.episode_length=40"]  # 2 s episodes: 200 samples at the plant's 100 Hz
+
+
+def tiny(tmp_path, *extra):
+    return config_lib.load(TrainConfig, [
+        f"out_dir={tmp_path}", "env=pendulum", "total_steps=1024", "updates_per_chunk=2", "progress=false",
+        "tensorboard=false", "ppo.num_envs=8", "ppo.num_steps=16", "ppo.num_minibatches=2", "ppo.num_epochs=2",
+        "ppo.net.hidden=[16,16]", *SHORT, *extra])
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("loop")
+    return train(tiny(tmp, "name=nominal"))["run_dir"]
+
+
+def _script(name):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(f"script_{name}", os.path.join(ROOT, "scripts", f"{name}.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _zero_policy(env):
+    def act(obs, carry, first, key):
+        return np.zeros((obs.shape[0], env.action_size), np.float32), carry
+
+    act.carry_size = 0
+    return act
+
+
+def test_native_plant_matches_the_env_on_the_envs_own_model():
+    """The env's MJCF stepped by native MuJoCo and the MJX env, from the same state under the same
+    (zero) commands, agree; the native log has a row per physics step."""
+    env = make("pendulum", episode_length=10)
+    act = _zero_policy(env)
+    a = native(env, env_model_path(env), act, 2, jax.random.PRNGKey(0))
+    assert a.dt == pytest.approx(0.01) and a.qpos.shape == (2, 51, 1) and np.all(a.length == 51)
+    sub = a.every(5)
+    assert sub.dt == pytest.approx(env.dt) and sub.qpos.shape == (2, 11, 1)
+    z = jax.numpy.asarray(env.default_z())
+    for e in range(2):
+        s = env.reset(jax.random.PRNGKey(0), z)
+        s = s.replace(data=s.data.replace(qpos=jax.numpy.asarray(a.qpos[e, 0], jax.numpy.float32),
+                                          qvel=jax.numpy.asarray(a.qvel[e, 0], jax.numpy.float32)))
+        qs = [s.data.qpos[0]]
+        for _ in range(10):
+            s = env.step(s, jax.numpy.zeros(1), z)
+            qs.append(s.data.qpos[0])
+        assert np.ptp(sub.qpos[e, :, 0]) > 1e-3  # it moved
+        np.testing.assert_allclose(np.array(qs), sub.qpos[e, :, 0], atol=2e-4)
+    b = simulated(env, env.default_z(), act, 2, jax.random.PRNGKey(0))
+    assert b.dt == pytest.approx(env.dt) and b.qpos.shape == (2, 11, 1)
+
+
+def test_recordings_round_trip_into_the_diagnosis_reader(tmp_path):
+    env = make("pendulum", episode_length=10)
+    r = native(env, PLANT, _zero_policy(env), 2, jax.random.PRNGKey(1), noise=1e-3)
+    paths = r.write(str(tmp_path))
+    rec = rec_lib.load(paths[0], env.mj_model)
+    assert rec.dt == pytest.approx(0.01) and len(rec) == 51
+    assert set(rec.columns) == {"qpos:hinge", "qvel:hinge", "ctrl:motor"}
+
+
+def test_native_target_must_have_the_envs_joints(tmp_path):
+    env = make("pendulum", episode_length=5)
+    xml = tmp_path / "other.xml"
+    xml.write_text(open(PLANT).read().replace('name="hinge"', 'name="axle"').replace('joint="hinge"', 'joint="axle"'))
+    with pytest.raises(KeyError, match="unknown joint.*hinge"):
+        native(env, str(xml), _zero_policy(env), 1, jax.random.PRNGKey(0))
+
+
+def _diagnosis(tmp_path, model, fitted, selected, nominal=None, period=0.01):
+    d = {"model": model, "sample_period": period, "fitted_params": fitted, "selected": selected,
+         "nominal_refit": nominal or {}}
+    os.makedirs(tmp_path, exist_ok=True)
+    with open(os.path.join(tmp_path, "diagnosis.json"), "w") as f:
+        json.dump(d, f)
+    return str(tmp_path)
+
+
+def test_diagnosis_becomes_the_physics_and_a_box_around_it(tmp_path):
+    env = make("pendulum")
+    diag = _diagnosis(tmp_path, env_model_path(env),
+                      {"mass:pole": 1.1, "coulomb:hinge": 0.3, "action_delay": 6.0},
+                      [{"effect": "coulomb_friction", "target": "hinge", "std": {"coulomb:hinge": 0.01}},
+                       {"effect": "action_delay", "target": "", "std": {"action_delay": float("nan")}}],
+                      {"mass:pole": {"nominal": 1.0, "fitted": 1.1, "std": 0.05}})
+    dr = from_diagnosis.resolve(DRConfig(params=("mass:pole",), low=(0.9,), high=(1.2,), from_diagnosis=diag,
+                                         diagnosis_k=2.0), env)
+    box = dict(zip(dr.params, zip(dr.low, dr.high)))
+    assert box["mass:pole"] == (0.9, 1.2)  # the user's own box wins
+    assert box["coulomb:hinge"] == pytest.approx((0.28, 0.32))
+    # 6 samples of 10 ms = 60 ms = 1.2 control steps of 50 ms; no std: held at the fitted value
+    assert dr.fixed == {"action_delay": pytest.approx(1.2)}
+    # resolving the resolved config again changes nothing (what a resume would see)
+    assert from_diagnosis.resolve(dr, env) == dr
+
+
+def test_diagnosis_of_another_model_or_an_unknown_parameter_is_refused(tmp_path):
+    env = make("pendulum")
+    other = _diagnosis(tmp_path / "a", os.path.join(ROOT, "sim2real", "envs", "assets", "cartpole.xml"),
+                       {"coulomb:hinge": 0.3}, [])
+    with pytest.raises(config_lib.ConfigError, match="not env 'pendulum''s"):
+        from_diagnosis.resolve(DRConfig(from_diagnosis=other), env)
+    payload = _diagnosis(tmp_path / "b", env_model_path(env), {"payload:pole": 0.2, "payload_r:pole": 0.7},
+                         [{"effect": "mass_offset", "target": "pole", "std": {"payload:pole": 0.01, "payload_r:pole": 0.1}}])
+    with pytest.raises(config_lib.ConfigError, match="payload_r:pole have no counterpart"):
+        from_diagnosis.resolve(DRConfig(from_diagnosis=payload), env)
+    with pytest.raises(config_lib.ConfigError, match="no diagnosis.json"):
+        from_diagnosis.resolve(DRConfig(from_diagnosis=str(tmp_path / "missing")), env)
+
+
+def test_record_script_writes_what_the_diagnosis_reads(run_dir, tmp_path):
+    record = _script("record")
+
+    out = tmp_path / "rec"
+    record.main([f"run={run_dir}", f"target={PLANT}", "episodes=2", f"out={out}", "noise=1e-3", "progress=false"])
+    files = sorted(f for f in os.listdir(out) if not f.startswith("."))
+    assert files[:2] == ["episode_000.csv", "episode_001.csv"] and "record.json" in files
+    env = make("pendulum")
+    rec = rec_lib.load(str(out / "episode_001.csv"), env.mj_model)
+    assert rec.dt == pytest.approx(0.01) and len(rec) == 201
+    what = json.load(open(out / "record.json"))
+    assert len(what["returns"]) == 2 and what["simulator"].startswith("native MuJoCo")
+    # the env itself as target, with physics values: logged per control step
+    record.main([f"run={run_dir}", "target=coulomb:hinge=0.3", "episodes=2", f"out={tmp_path / 'sim'}",
+                 "progress=false"])
+    assert rec_lib.load(str(tmp_path / "sim" / "episode_000.csv"), env.mj_model).dt == pytest.approx(0.05)
+    with pytest.raises(KeyError, match="unknown parameter|nope"):
+        record.main([f"run={run_dir}", "target=nope=1", "episodes=1", f"out={tmp_path / 'x'}", "progress=false"])
+    assert not os.path.exists(tmp_path / "x")
+
+
+def test_one_loop_iteration_end_to_end(tmp_path):
+    """Train, record on the 'real' pendulum, diagnose, retrain from the diagnosis: one call."""
+    loop = _script("loop")
+
+    out = tmp_path / "loop"
+    loop.main(["env=pendulum", "total_steps=1024", "updates_per_chunk=2", "tensorboard=false", "ppo.num_envs=8",
+               "ppo.num_steps=16", "ppo.num_minibatches=2", "ppo.num_epochs=2", "ppo.net.hidden=[16,16]", *SHORT,
+               f"target={PLANT}", "episodes=2", "eval_episodes=2", f"out={out}", "progress=false", "noise=1e-3",
+               "diagnose.effects=[coulomb_friction,action_delay]"])  # (a toy policy: keep the answer to what the env can take)
+    res = json.load(open(out / "loop.json"))
+    assert set(res["scores"]) == {"nominal", "iter_1"}
+    cfg = yaml.safe_load(open(out / "iter_1" / "run" / "config.yaml"))
+    assert cfg["dr"]["from_diagnosis"].endswith("diagnosis")
+    d = json.load(open(out / "iter_1" / "diagnosis" / "diagnosis.json"))
+    # whatever was fitted is the new run's physics: in its box or fixed
+    for name in d["fitted_params"]:
+        name = "joint_damping" if name.startswith("damping:") else name
+        assert name in cfg["dr"]["params"] or name in cfg["dr"]["fixed"], name
+    assert os.path.exists(out / "iter_1" / "run" / "policy.msgpack")
