@@ -113,23 +113,23 @@ def main():
                                                                    high=tuple(v[1] for v in w.values())))
         seconds["udr_wide"] = time.time() - t
         add("udr_wide", _scores(r, plant, args.episodes, S))
-    # the one real budget: 3 episodes of each seed's nominal policy
-    rec = {}
+    # the one real budget: 3 episodes of each seed's nominal policy; SimOpt compares at the env's
+    # control step, so it reads the same recordings every frame_skip-th row
+    from sim2real.envs.registry import env_class
+    from sim2real.record import from_run, save
+
+    frame_skip = base.env_options.get("frame_skip", env_class(base.env).default_config.frame_skip)
+    ctrl_rate = {}
     for s in range(S):
-        rec[s], _ = loop.record_to(nominal, plant, os.path.join(work, f"rec_nominal_{s}"), 3, seed=100 + s,
-                                   run_seed=s, noise=1e-3)
+        rolls, what = from_run(nominal, plant, 3, seed=100 + s, run_seed=s, noise=1e-3)
+        save(rolls, what, os.path.join(work, f"rec_nominal_{s}"))
+        ctrl_rate[s] = save(rolls.every(frame_skip), what, os.path.join(work, f"rec_nominal_{s}_ctrl"))
     if "simopt" in methods:
         t = time.time()
         so = setup["simopt"]
         rets = []
         for s in range(S):
-            # SimOpt compares at the env's control step: the same recordings, every frame_skip-th row
-            ctrl_rate = os.path.join(work, f"rec_nominal_{s}_ctrl")
-            os.makedirs(ctrl_rate, exist_ok=True)
-            paths = []
-            for p in rec[s]:
-                _subsample(p, os.path.join(ctrl_rate, os.path.basename(p)), base.env_options, base.env)
-                paths.append(os.path.join(ctrl_rate, os.path.basename(p)))
+            paths = ctrl_rate[s]
             cfg = SimOptRunConfig(name=f"simopt_{s}", out_dir=work, env=base.env, env_options=base.env_options,
                                   seed=s, real="recordings", recordings=tuple(paths), progress=False, ppo=base.ppo,
                                   dr=DRConfig(params=tuple(so["params"]), low=tuple(so["low"]), high=tuple(so["high"])),
@@ -160,18 +160,6 @@ def main():
         if r2:
             add("diag_dr_2", r2)
     write(args, setup, rows, diagnoses, seconds)
-
-
-def _subsample(src, dst, env_options, env_name):
-    """A physics-rate recording at the env's control step (every frame_skip-th row)."""
-    from sim2real.envs import make
-
-    env = make(env_name, **env_options)
-    with open(src) as f:
-        lines = f.read().strip().splitlines()
-    k = env.config.frame_skip
-    with open(dst, "w") as f:
-        f.write("\n".join([lines[0]] + lines[1::k]) + "\n")
 
 
 def write(args, setup, rows, diagnoses, seconds):

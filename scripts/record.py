@@ -10,7 +10,6 @@ the position sensor's noise on an MJCF target (m or rad); ``deterministic=false`
 (more excitation for identification). Writes ``DIR/episode_000.csv``... and ``DIR/record.json``
 (what was rolled, the returns).
 """
-import json
 import os
 import sys
 
@@ -21,7 +20,7 @@ def main(argv):
     from sim2real import config as config_lib
     from sim2real import output
     from sim2real.progress import Bar
-    from sim2real.record import from_run
+    from sim2real.record import from_run, save
 
     a = config_lib.script_args(argv, {"run": "", "target": "", "episodes": 3, "out": "", "seed": 0, "run_seed": 0,
                                       "noise": 0.0, "deterministic": True, "overwrite": False, "progress": True})
@@ -48,10 +47,7 @@ def main(argv):
     finally:
         for b in bars:
             b.close()
-    with output.staged(a["out"], "recordings", inputs=inputs, overwrite=a["overwrite"]) as tmp:
-        rolls.write(tmp)
-        with open(os.path.join(tmp, "record.json"), "w") as f:
-            json.dump(what, f, indent=2)
+    save(rolls, what, a["out"], inputs, a["overwrite"])
     print(f"wrote {a['episodes']} recordings to {a['out']} ({1 / rolls.dt:g} Hz); returns: "
           + ", ".join(f"{r:.1f}" for r in rolls.ret) + f" (mean {what['mean_return']:.1f})")
 

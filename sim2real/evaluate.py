@@ -11,6 +11,14 @@ from sim2real.rl.ppo import PPO
 from sim2real.rl.rollout import to_ctrl
 
 
+def action(env: Env, ppo: PPO, params, obs_stats, obs, ctx, carry, first, key, deterministic: bool = True):
+    """One policy step on one observation ``obs [O]``: ``(ctrl [nu] in actuator units, carry)``;
+    the Gaussian mean, or a sample of it when not ``deterministic``."""
+    (mean, log_std, _), carry = ppo.net.apply(params, _norm(obs_stats, obs), ctx, carry, first)
+    a = mean if deterministic else mean + jnp.exp(log_std) * jax.random.normal(key, mean.shape)
+    return to_ctrl(env, a), carry
+
+
 def closed_loop(env: Env, ppo: PPO, params, obs_stats, s, z, key, horizon: int, deterministic: bool = True,
                 stop_on_truncation: bool = True, record=None):
     """Run the policy for ``horizon`` steps from env state ``s`` with physics ``z [P]``.
@@ -27,9 +35,7 @@ def closed_loop(env: Env, ppo: PPO, params, obs_stats, s, z, key, horizon: int, 
 
     def step(c, k):
         s, carry, alive, ret, length, first = c
-        (mean, log_std, _), carry = ppo.net.apply(params, _norm(obs_stats, s.obs), ctx, carry, first)
-        a = mean if deterministic else mean + jnp.exp(log_std) * jax.random.normal(k, mean.shape)
-        ctrl = to_ctrl(env, a)
+        ctrl, carry = action(env, ppo, params, obs_stats, s.obs, ctx, carry, first, k, deterministic)
         s2 = env.step(s, ctrl, z)
         ret = ret + jnp.where(alive, s2.reward, 0.0)
         length = length + alive

@@ -2,7 +2,7 @@
 
 One iteration (``iteration``), in ``out/iter_<k>/``:
 
-1. ``recordings/``: ``episodes`` episodes of the current policy on the target (``record.from_run``);
+1. ``recordings/``: ``episodes`` episodes of the current policy on the target (``record.from_run``, ``record.save``);
 2. ``diagnosis/``: the env's own MJCF diagnosed on them (all but the last episode fit, the last
    one held out: ``sysid.diagnose``);
 3. ``run/``: the training config retrained with ``dr.from_diagnosis`` = that diagnosis (the fitted
@@ -15,30 +15,16 @@ missed the second may find in recordings of a policy that behaves differently.
 from __future__ import annotations
 
 import dataclasses
-import json
 import os
 
-from sim2real import output
 from sim2real.envs.base import ASSETS
 from sim2real.train import TrainConfig
 
 
 def env_model_path(env) -> str:
-    """The env's own MJCF (what the diagnosis must describe for ``dr.from_diagnosis``)."""
+    """The env's own MJCF (what the diagnosis must describe for ``dr.from_diagnosis``); ``env`` is
+    an env or its class."""
     return os.path.join(ASSETS, env.xml)
-
-
-def record_to(run_dir: str, target: str, folder: str, episodes: int, seed: int, run_seed: int = 0,
-              noise: float = 0.0, deterministic: bool = True) -> tuple[list[str], dict]:
-    """Record ``episodes`` of a run's policy on ``target`` into ``folder`` (made here)."""
-    from sim2real.record import from_run
-
-    rolls, what = from_run(run_dir, target, episodes, seed, run_seed, noise, deterministic)
-    with output.staged(folder, "recordings") as tmp:
-        rolls.write(tmp)
-        with open(os.path.join(tmp, "record.json"), "w") as f:
-            json.dump(what, f, indent=2)
-    return [os.path.join(folder, f"episode_{e:03d}.csv") for e in range(episodes)], what
 
 
 def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: int = 3, seed: int = 0,
@@ -47,16 +33,17 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
     """One loop iteration from the policy of ``run_dir`` (seed ``run_seed``); returns what it did
     (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded episodes)."""
     from sim2real import config as config_lib
-    from sim2real.envs import make
+    from sim2real.envs.registry import env_class
+    from sim2real.record import from_run, save
     from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
     from sim2real.train import train
 
     if episodes < 2:
         raise config_lib.ConfigError(f"episodes={episodes}: the loop needs >= 2 (the last one is held out)")
-    env = make(base.env, **base.env_options)
-    paths, what = record_to(run_dir, target, os.path.join(out, "recordings"), episodes, seed, run_seed, noise,
-                            deterministic)
-    dcfg = config_lib.load(DiagnoseConfig, [f"model={env_model_path(env)}", f"recordings=[{','.join(paths[:-1])}]",
+    rolls, what = from_run(run_dir, target, episodes, seed, run_seed, noise, deterministic)
+    paths = save(rolls, what, os.path.join(out, "recordings"))
+    model = env_model_path(env_class(base.env))
+    dcfg = config_lib.load(DiagnoseConfig, [f"model={model}", f"recordings=[{','.join(paths[:-1])}]",
                                             f"heldout=[{paths[-1]}]", f"out={os.path.join(out, 'diagnosis')}",
                                             f"progress={str(progress).lower()}"] + list(diagnose_options))
     d = diagnose(dcfg)

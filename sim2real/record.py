@@ -73,28 +73,21 @@ class Rollouts:
         return paths
 
 
-def _names(m: mujoco.MjModel, obj, n: int) -> list[str]:
-    return [mujoco.mj_id2name(m, obj, i) or "" for i in range(n)]
-
-
 def policy(env: Env, ppo, params, obs_stats, z_ctx, deterministic: bool = True):
     """``act(obs [E, O], carry [E, H], first [E], key) -> (ctrl [E, nu], carry)``, jitted.
 
     ``z_ctx [P]``: the physics a context-conditioned policy is told (on a real system the true
     one is unknown: the run's nominal belief).
     """
-    from sim2real.evaluate import _norm
+    from sim2real.evaluate import action
     from sim2real.rl import networks
-    from sim2real.rl.rollout import to_ctrl
 
     ctx = ppo.ctx(jnp.asarray(z_ctx))
 
     @jax.jit
     def act(obs, carry, first, key):
         def one(o, c, f, k):
-            (mean, log_std, _), c = ppo.net.apply(params, _norm(obs_stats, o), ctx, c, f)
-            a = mean if deterministic else mean + jnp.exp(log_std) * jax.random.normal(k, mean.shape)
-            return to_ctrl(env, a), c
+            return action(env, ppo, params, obs_stats, o, ctx, c, f, k, deterministic)
 
         return jax.vmap(one)(obs, carry, first, jax.random.split(key, obs.shape[0]))
 
@@ -117,8 +110,8 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
     except Exception as e:  # mujoco's parser error
         raise ValueError(f"target {xml_path}: cannot compile the MJCF: {e}") from None
     em = env.mj_model
-    joints = _names(em, mujoco.mjtObj.mjOBJ_JOINT, em.njnt)
-    acts = _names(em, mujoco.mjtObj.mjOBJ_ACTUATOR, em.nu)
+    joints = catalog.names(em, mujoco.mjtObj.mjOBJ_JOINT)
+    acts = catalog.names(em, mujoco.mjtObj.mjOBJ_ACTUATOR)
     jid = [catalog.lookup(m, mujoco.mjtObj.mjOBJ_JOINT, j, f"joint (target {xml_path}, needed by env '{env.name}')")
            for j in joints]
     aid = [catalog.lookup(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a, f"actuator (target {xml_path})") for a in acts]
@@ -162,10 +155,13 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
 
         return jax.vmap(one)(q0_, v0_, q1, v1, u, g)
 
+    def state():  # true joint positions and velocities [E, nq], env order
+        return np.stack([d.qpos[qadr] for d in datas]), np.stack([d.qvel[vadr] for d in datas])
+
     def measure(k):
-        q = np.stack([d.qpos[qadr] for d in datas]) + (noise * rng.standard_normal((episodes, len(joints)))
-                                                       if noise > 0 else 0.0)
-        v = np.stack([d.qvel[vadr] for d in datas])
+        q, v = state()
+        if noise > 0:
+            q = q + noise * rng.standard_normal(q.shape)
         qpos[:, k], qvel[:, k] = q, v
         return q, v
 
@@ -177,8 +173,7 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
         u, carry = act(obs, carry, first, jax.random.fold_in(k_act, t))
         u = np.asarray(u, np.float64)
         first = jnp.zeros(episodes, bool)
-        q_before = np.stack([d.qpos[qadr] for d in datas])
-        v_before = np.stack([d.qvel[vadr] for d in datas])
+        q_before, v_before = state()
         live = np.nonzero(alive)[0]
         for e in live:
             datas[e].ctrl[aid] = u[e]
@@ -188,8 +183,7 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
             q_meas, v_meas = measure(t * sub + s + 1)
             ctrl[:, t * sub + s] = u
         ok = np.array([np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all() for d in datas])
-        q_after = np.stack([d.qpos[qadr] for d in datas])
-        v_after = np.stack([d.qvel[vadr] for d in datas])
+        q_after, v_after = state()
         r, term = task(*(jnp.asarray(x, jnp.float32) for x in (q_before, v_before, q_after, v_after, u)), goal)
         r, term = np.asarray(r), np.asarray(term) | ~ok
         ret += np.where(alive, np.where(ok, r, 0.0), 0.0)
@@ -240,7 +234,22 @@ def simulated(env: Env, z, act, episodes: int, key) -> Rollouts:
     ctrl = np.concatenate([u, u[:, -1:]], 1)
     em = env.mj_model
     return Rollouts(env.dt, qpos, qvel, ctrl, n.astype(int) + 1, ret,
-                    _names(em, mujoco.mjtObj.mjOBJ_JOINT, em.njnt), _names(em, mujoco.mjtObj.mjOBJ_ACTUATOR, em.nu))
+                    catalog.names(em, mujoco.mjtObj.mjOBJ_JOINT), catalog.names(em, mujoco.mjtObj.mjOBJ_ACTUATOR))
+
+
+def save(rolls: Rollouts, what: dict, folder: str, inputs=(), overwrite: bool = False) -> list[str]:
+    """Write the recordings and ``record.json`` into ``folder``, staged (``sim2real.output``: the
+    folder appears complete or not at all; only a recordings folder sim2real made is replaced).
+    Returns the recordings' final paths."""
+    import json
+
+    from sim2real import output
+
+    with output.staged(folder, "recordings", inputs=inputs, overwrite=overwrite) as tmp:
+        names = [os.path.basename(p) for p in rolls.write(tmp)]
+        with open(os.path.join(tmp, "record.json"), "w") as f:
+            json.dump(what, f, indent=2)
+    return [os.path.join(folder, n) for n in names]
 
 
 def parse_target(text: str) -> tuple[str, dict[str, float]]:

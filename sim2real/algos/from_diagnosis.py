@@ -24,6 +24,7 @@ import numpy as np
 from sim2real.algos.base import DRConfig
 from sim2real.config import ConfigError
 from sim2real.envs.base import Env
+from sim2real.physics import catalog
 
 # fitted alongside an effect but with no counterpart in the envs' physics (a payload's distance
 # along the link, the motor inertia crossing a backlash): an error when a selected effect has them
@@ -47,10 +48,6 @@ def load(path: str) -> dict:
     return d
 
 
-def _names(m, obj, n):
-    return [mujoco.mj_id2name(m, obj, i) for i in range(n)]
-
-
 def check_same_model(d: dict, env: Env) -> None:
     """The diagnosed model must be the env's: the same joints (names and types) and actuators."""
     try:
@@ -59,8 +56,8 @@ def check_same_model(d: dict, env: Env) -> None:
         raise ConfigError(f"dr.from_diagnosis: the diagnosed model '{d['model']}' cannot be loaded ({e})") from None
     em = env.mj_model
     J, A = mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_ACTUATOR
-    mine = (_names(em, J, em.njnt), list(em.jnt_type), _names(em, A, em.nu))
-    theirs = (_names(m, J, m.njnt), list(m.jnt_type), _names(m, A, m.nu))
+    mine = (catalog.names(em, J), list(em.jnt_type), catalog.names(em, A))
+    theirs = (catalog.names(m, J), list(m.jnt_type), catalog.names(m, A))
     if mine != theirs:
         raise ConfigError(f"dr.from_diagnosis: the diagnosed model '{d['model']}' is not env '{env.name}''s "
                           f"(joints {theirs[0]}, actuators {theirs[2]}; the env has joints {mine[0]}, "

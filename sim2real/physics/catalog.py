@@ -188,11 +188,16 @@ def common_params(m: mujoco.MjModel, max_delay: int) -> list[Param]:
     ]
 
 
+def names(m: mujoco.MjModel, obj) -> list[str]:
+    """Names of every joint / actuator / body / geom (``obj``), in id order ("" where unnamed)."""
+    n = {_JOINT: m.njnt, _ACT: m.nu, _BODY: m.nbody, _GEOM: m.ngeom}[obj]
+    return [mujoco.mj_id2name(m, obj, k) or "" for k in range(n)]
+
+
 def lookup(m: mujoco.MjModel, obj, name: str, what: str) -> int:
     i = mujoco.mj_name2id(m, obj, name)
     if i < 0:
-        n = {_JOINT: m.njnt, _ACT: m.nu, _BODY: m.nbody, _GEOM: m.ngeom}[obj]
-        known = [mujoco.mj_id2name(m, obj, k) for k in range(n)]
+        known = names(m, obj)
         raise KeyError(f"unknown {what} '{name}'; the model has: {', '.join(k for k in known if k)}")
     return i
 
