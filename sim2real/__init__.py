@@ -1,30 +1,39 @@
-"""sim2real: JAX-native, massively batched sim-to-real training and sim-vs-real diagnosis."""
-import contextlib as _contextlib
-import importlib as _importlib
-import io as _io
-import sys as _sys
+"""sim2real: JAX-native, massively batched sim-to-real training and sim-vs-real diagnosis.
+
+What a user imports (loaded on first use, so ``import sim2real`` is instant and has no side
+effects)::
+
+    import sim2real as s2r
+    env = s2r.make("pendulum")                       # an MJX env with named physics (env.spec)
+    z = env.z_of(**{"mass:pole": 1.2})               # a physics vector, bounds checked
+    out = s2r.train(s2r.TrainConfig(env="pendulum", total_steps=200_000))
+    d = s2r.diagnose(s2r.DiagnoseConfig(model="robot.xml", recordings=("run1.csv",)))
+"""
+from __future__ import annotations
+
+from sim2real._lazy import exports
 
 __version__ = "0.1.0"
 
-
-def _import_mjx_quietly() -> None:
-    """Import ``mujoco.mjx`` without its "Failed to import warp" lines when Warp is absent.
-
-    mujoco.mjx tries its optional Warp backend on import and *prints* (not logs) two lines when
-    the ``warp`` module is missing, on every process start. This package uses the JAX backend
-    only, so those two lines are dropped; anything else printed (Warp installed but broken, for
-    instance) is passed through to stdout.
-    """
-    buf = _io.StringIO()
-    try:
-        with _contextlib.redirect_stdout(buf):
-            _importlib.import_module("mujoco.mjx")
-    finally:
-        for line in buf.getvalue().splitlines(keepends=True):
-            if line.startswith(("Failed to import warp:", "Failed to import mujoco_warp:")) \
-                    and "No module named 'warp'" in line:
-                continue
-            _sys.stdout.write(line)
-
-
-_import_mjx_quietly()
+# public name -> "module:attribute"
+_EXPORTS = {
+    "make": "sim2real.envs:make",
+    "env_names": "sim2real.envs:names",
+    "Env": "sim2real.envs:Env",
+    "EnvConfig": "sim2real.envs:EnvConfig",
+    "Param": "sim2real.physics.params:Param",
+    "ParamSpec": "sim2real.physics.params:ParamSpec",
+    "PPO": "sim2real.rl.ppo:PPO",
+    "PPOConfig": "sim2real.rl.ppo:PPOConfig",
+    "DRConfig": "sim2real.algos.base:DRConfig",
+    "TrainConfig": "sim2real.train:TrainConfig",
+    "train": "sim2real.train:train",
+    "load_policy": "sim2real.train:load_policy",
+    "DiagnoseConfig": "sim2real.sysid.diagnose:DiagnoseConfig",
+    "diagnose": "sim2real.sysid.diagnose:diagnose",
+    "load_recordings": "sim2real.sysid.recordings:load_all",
+    "Recording": "sim2real.sysid.recordings:Recording",
+    "ConfigError": "sim2real.config:ConfigError",
+}
+__getattr__, __dir__, __all__ = exports(__name__, _EXPORTS)
+__all__ = __all__ + ["__version__"]

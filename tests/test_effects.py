@@ -41,7 +41,7 @@ def test_effects_off_is_bitwise_neutral(name):
         for j in range(n):
             u, es = fx.actuate(z, es, j, n, qpos, env.dt / n)
             np.testing.assert_array_equal(np.asarray(u), np.asarray(ctrl))
-    _, extra = fx.friction_damping(z, qvel)
+    _, extra = fx.velocity_damping(z, qvel)
     assert np.all(np.asarray(extra) == 0.0)
     np.testing.assert_array_equal(np.asarray(fx.sense(z, qpos, KEY)), np.asarray(qpos))
     m = env.physics.apply(z)

@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 from flax import struct
-from mujoco import mjx
+from sim2real._mjx import mjx
 
 from sim2real.physics import catalog, stepper
 from sim2real.physics.effects import Effects, EffectsConfig, EffectState

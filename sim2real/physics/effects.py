@@ -7,18 +7,16 @@ Pipeline of one control step (``Env.step``)::
 
     action enters the delay line (once per control step); then every physics sub-step:
       delayed command (exact for fractional delays) -> motor_lag -> backlash
-      -> [MuJoCo: saturation via forcerange]; Coulomb/Stribeck friction as a damping term
+      -> [MuJoCo: saturation via forcerange]; velocity-dependent forces (Coulomb/Stribeck
+      friction, quadratic drag: the ``damping`` hooks of ``physics/kinds/``) as damping terms
     measured qpos = qpos + sensor_offset + sensor_noise * N(0, 1)
 
 The command path runs at the physics sub-step, so a delay or lag that is not a whole number of
 control steps acts when it should (a 1.4-step delay switches the command 0.4 of a step late, not
 blended over the step); with one sub-step per control step this is the per-step pipeline.
 
-Coulomb friction is written as ``f(v) = c(v) * v`` with ``c(v) = level(v) * tanh(v/eps) / v >= 0``
-and added to ``dof_damping`` for the substep: MuJoCo's Euler integrator treats damping
-implicitly, so the stiff region near ``v = 0`` stays stable for any ``eps`` and the joint sticks
-instead of chattering. This needs no frictionloss structure in the compiled model (the MJX
-``put_model`` pitfall) and stays differentiable. Envs therefore keep ``eulerdamp`` enabled.
+Velocity-dependent forces are written as damping ``c(v) >= 0`` added to ``dof_damping`` for the
+sub-step (``kinds/coulomb.py`` says why); envs therefore keep ``eulerdamp`` enabled.
 """
 from __future__ import annotations
 
@@ -30,7 +28,10 @@ import mujoco
 import numpy as np
 from flax import struct
 
-from sim2real.physics.catalog import is_servo
+from sim2real.physics import kinds
+from sim2real.physics.kinds.base import rows as _rows
+from sim2real.physics.kinds.base import take
+from sim2real.physics.kinds.gain import is_servo
 from sim2real.physics.params import ParamSpec
 
 
@@ -49,12 +50,6 @@ class EffectState:
     lag: jax.Array
     gap: jax.Array
     gap_vel: jax.Array
-
-
-def _rows(spec: ParamSpec, kind: str, ids) -> np.ndarray:
-    """Index into z of ``kind`` for each id in ``ids`` (or -1 when the env has no such entry)."""
-    by_id = {p.index: i for i, p in spec.of_kind(kind)}
-    return np.array([by_id.get(int(k), -1) for k in ids], np.int32)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -93,14 +88,10 @@ class Effects:
         self.r_binertia = _rows(spec, "backlash_inertia", acts)
         self.r_lag = _rows(spec, "motor_lag", acts)
         self.r_gain = _rows(spec, "actuator_gain", acts)
-        # joint-level friction entries
-        fj = [p.index for _, p in spec.of_kind("coulomb")]
-        self.fric_joints = np.array(fj, np.int32)
-        self.fric_dof = np.array([m.jnt_dofadr[j] for j in fj], np.int32)
-        self.r_fc = _rows(spec, "coulomb", fj)
-        self.r_fa = _rows(spec, "coulomb_asym", fj)
-        self.r_fs = _rows(spec, "stribeck", fj)
-        self.r_vs = _rows(spec, "stribeck_vel", fj)
+        # velocity-dependent forces as damping: (plug-in, its dofs, its static data) per kind
+        self._damping = [(k, *ds) for k in kinds.all_kinds() if (ds := k.damping_setup(m, spec, cfg)) is not None]
+        self.damping_dofs = (np.concatenate([d for _, d, _ in self._damping]).astype(np.int32) if self._damping
+                             else np.zeros((0,), np.int32))
         sj = [p.index for _, p in spec.of_kind("sensor_offset")]
         self.sense_qpos = np.array([m.jnt_qposadr[j] for j in sj], np.int32)
         self.r_off = _rows(spec, "sensor_offset", sj)
@@ -128,13 +119,7 @@ class Effects:
             gap_vel=jnp.zeros(nu),
         )
 
-    @staticmethod
-    def _take(z, rows, default=0.0):
-        rows = np.asarray(rows)
-        if rows.size == 0:
-            return jnp.zeros((0,))
-        vals = z[np.maximum(rows, 0)]
-        return jnp.where(rows >= 0, vals, default)
+    _take = staticmethod(take)
 
     def push(self, es: EffectState, ctrl) -> EffectState:
         """A new command ``[nu]`` enters the delay line (once per control step)."""
@@ -205,21 +190,15 @@ class Effects:
             u = jnp.where(on, jnp.where(self.act_servo, servo_u, motor_u), u)
         return u, es.replace(lag=lag_state, gap=gap, gap_vel=gap_vel)
 
-    def friction_damping(self, z, qvel) -> tuple[np.ndarray, jax.Array]:
-        """Coulomb/Stribeck friction as velocity-dependent damping for one substep.
+    def velocity_damping(self, z, qvel) -> tuple[np.ndarray, jax.Array]:
+        """Velocity-dependent forces (Coulomb/Stribeck friction, drag, ...) as damping for one sub-step.
 
-        Returns ``(dof indices [J], damping to add [J])``; zero where friction is off.
+        Returns ``(dof indices [J], damping to add [J])`` (a dof may repeat: add, do not set);
+        zero where every such effect is off.
         """
-        if self.fric_dof.size == 0:
-            return self.fric_dof, jnp.zeros((0,))
-        v = qvel[self.fric_dof]
-        fc, asym = self._take(z, self.r_fc), self._take(z, self.r_fa)
-        fs, vs = self._take(z, self.r_fs), self._take(z, self.r_vs, 0.1)
-        level = fc * (1.0 + asym * jnp.sign(v)) + fs * jnp.exp(-jnp.square(v / vs))
-        eps = self.cfg.coulomb_eps
-        safe_v = jnp.where(jnp.abs(v) > 1e-12, v, 1.0)
-        c = jnp.where(jnp.abs(v) > 1e-12, level * jnp.tanh(v / eps) / safe_v, level / eps)
-        return self.fric_dof, jnp.where(level > 0, c, 0.0)
+        if not self._damping:
+            return self.damping_dofs, jnp.zeros((0,))
+        return self.damping_dofs, jnp.concatenate([k.damping(data, z, qvel[dofs]) for k, dofs, data in self._damping])
 
     def sense(self, z, qpos, key):
         """Measured joint positions ``[nq]``: offsets and white noise on effect joints."""

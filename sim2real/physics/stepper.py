@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
-from mujoco import mjx
+from sim2real._mjx import mjx
 
 from sim2real.physics.effects import Effects, EffectState
 
@@ -34,7 +34,7 @@ def advance(effects: Effects, model: mjx.Model, z, data: mjx.Data, es: EffectSta
         d, es = carry
         u, es = effects.actuate(z, es, j, substeps, d.qpos, h)
         d = d.replace(ctrl=u)
-        dofs, extra = effects.friction_damping(z, d.qvel)
+        dofs, extra = effects.velocity_damping(z, d.qvel)
         m = model.replace(dof_damping=model.dof_damping.at[dofs].add(extra)) if dofs.size else model
         return (mjx.step(m, d), es), None
 

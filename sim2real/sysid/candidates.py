@@ -1,7 +1,8 @@
 """The candidate missing-physics effects the diagnosis searches, with their search grids.
 
 Each candidate is an effect of the simulator's effects library attached to one joint, actuator
-or body (or global), described by the physics parameters it sets. Every candidate is screened on
+or body (or global), described by the physics parameters it sets; each kind's plug-in
+(``physics/kinds/``) says which hypotheses it offers and over what grid. Every candidate is screened on
 a small grid of its own magnitude (``grid``: simulated at each point, the nominal parameters
 re-solved linearly), then the best are fitted by Gauss-Newton on the simulation error.
 
@@ -17,6 +18,7 @@ action_delay           global      ``action_delay`` (samples, fractional)
 motor_lag              actuator    ``motor_lag`` (time constant, s)
 actuator_saturation    actuator    ``saturation`` (force limit, actuator force units)
 backlash               actuator    ``backlash`` (dead band width, joint units)
+quadratic_drag         joint       ``drag`` (force -c v|v|; searched only when asked for)
 =====================  ==========  ==========================================================
 
 Grids are in the system's own scales (``Scales``): the force a joint needs, its speed and
@@ -30,8 +32,14 @@ import dataclasses
 import mujoco
 import numpy as np
 
-EFFECTS = ("none", "coulomb_friction", "viscous_damping", "joint_stiffness", "sensor_offset", "mass_offset",
-           "action_delay", "motor_lag", "actuator_saturation", "backlash")
+from sim2real.physics import kinds
+
+# (joint, body, global, actuator hypotheses, in the library's order; each from its kind plug-in)
+_GROUPS = (kinds.JOINT, kinds.BODY, "", kinds.ACTUATOR)
+EFFECTS = ("none",) + tuple(k.effect for g in _GROUPS for k in kinds.offering(g, default_only=True))
+"""What the diagnosis searches by default."""
+ALL_EFFECTS = ("none",) + tuple(k.effect for g in _GROUPS for k in kinds.offering(g))
+"""Everything it can search (``effects=[...]`` may add the rest, e.g. ``quadratic_drag``)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -122,67 +130,24 @@ def scales_from(system, trajs, act_force: np.ndarray) -> Scales:
 
 
 def library(system, sc: Scales, effects=EFFECTS) -> list[Candidate]:
-    """Every candidate for this model (``effects`` limits the kinds)."""
-    unknown = set(effects) - set(EFFECTS)
+    """Every candidate for this model (``effects`` limits the kinds): per joint, per moving body,
+    global, per actuator, each kind's hypotheses from its plug-in (``physics/kinds/``)."""
+    unknown = set(effects) - set(ALL_EFFECTS)
     if unknown:
-        raise ValueError(f"unknown effect(s) {sorted(unknown)}; the library has {', '.join(EFFECTS)}")
-    m, spec = system.mj, system.spec
+        raise ValueError(f"unknown effect(s) {sorted(unknown)}; the library has {', '.join(ALL_EFFECTS)}")
+    m = system.mj
     out: list[Candidate] = []
 
     def add(effect, target, params, grid, scales, search):
         out.append(Candidate(effect, target, tuple(params), tuple(tuple(float(x) for x in g) for g in grid),
                              tuple(float(s) for s in scales), tuple(tuple(map(float, r)) for r in search)))
 
-    for j, jn in enumerate(system.joints):
-        F, V, R = sc.force[j], sc.speed[j], sc.range[j]
-        slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
-        if "coulomb_friction" in effects and not system.declared_friction(jn):
-            add("coulomb_friction", jn, [f"coulomb:{jn}"], [(f * F,) for f in (0.03, 0.1, 0.3)], [0.1 * F],
-                [(0.0, 2.0 * F)])
-        if "viscous_damping" in effects and not system.declared_damping(jn):
-            c = F / V
-            add("viscous_damping", jn, [f"viscous:{jn}"], [(f * c,) for f in (0.03, 0.1, 0.3)], [0.1 * c],
-                [(0.0, 3.0 * c)])
-        if "joint_stiffness" in effects and not system.declared_stiffness(jn):
-            k = F / (0.5 * R)
-            add("joint_stiffness", jn, [f"stiffness:{jn}"], [(f * k,) for f in (0.03, 0.1, 0.3)], [0.1 * k],
-                [(0.0, 3.0 * k)])
-        if "sensor_offset" in effects:
-            o = 0.05 * R if slide else min(0.05, 0.05 * R)
-            add("sensor_offset", jn, [f"sensor_offset:{jn}"], [(s * f * o,) for f in (0.4, 2.0) for s in (-1, 1)],
-                [o], [(-30 * o, 30 * o)])
-    if "mass_offset" in effects:
-        for _, p in spec.of_kind("payload_r"):
-            b = p.index
-            bn = system.bodies[b]
-            mb = float(m.body_mass[b])
-            L = p.default  # the link's far end
-            add("mass_offset", bn, [f"payload:{bn}", f"payload_r:{bn}"],
-                [(f * mb, r * L) for f in (0.15, 0.4, 1.0) for r in (0.5, 1.0)], [0.3 * mb, 0.5 * L],
-                [(0.0, 5.0 * mb), (0.0, float(p.high))])
-    dt = sc.dt
-    if "action_delay" in effects and m.nu:
-        pts = [d for d in (0.4, 1.0, 2.0, 3.5, 6.0, 10.0, 17.0, 28.0, 45.0, 70.0) if d <= sc.max_delay - 1]
-        add("action_delay", "", ["action_delay"], [(d,) for d in pts], [1.0], [(0.1, float(max(pts)))])
-    for a, an in enumerate(system.actuators):
-        j = int(m.actuator_trnid[a, 0])
-        if "motor_lag" in effects:
-            taus = np.geomspace(max(0.4 * dt, 0.002), 0.25, 7)
-            add("motor_lag", an, [f"motor_lag:{an}"], [(t,) for t in taus], [float(taus[2])],
-                [(0.25 * float(taus[0]), 0.25)])
-        if "actuator_saturation" in effects:
-            f = sc.act_force[a]
-            add("actuator_saturation", an, [f"saturation:{an}"], [(q * f,) for q in (0.2, 0.32, 0.5, 0.75)],
-                [0.2 * f], [(0.2 * f, 1.0 * f)])
-        if "backlash" in effects:
-            # the dead band's width and the inertia of the motor side that crosses it (a few
-            # percent of the joint's own, unknown: fitted)
-            slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
-            widths = np.geomspace(4e-5, 2e-3, 4) if slide else np.geomspace(0.004, 0.06, 4)
-            J = float(sc.inertia[j]) if sc.inertia is not None else 1e-2
-            add("backlash", an, [f"backlash:{an}", f"backlash_inertia:{an}"],
-                [(w, f * J) for w in widths for f in (0.01, 0.1)], [float(widths[1]), 0.03 * J],
-                [(0.25 * float(widths[0]), float(widths[-1])), (1e-4 * J, 2.0 * J)])
+    targets = {kinds.JOINT: range(m.njnt), kinds.BODY: range(m.nbody), "": (-1,), kinds.ACTUATOR: range(m.nu)}
+    for group in _GROUPS:
+        plugins = [k for k in kinds.offering(group) if k.effect in effects]
+        for t in targets[group]:
+            for k in plugins:
+                k.candidates(system, sc, add, t)
     return out
 
 

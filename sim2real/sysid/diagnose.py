@@ -26,7 +26,7 @@ import numpy as np
 from sim2real import output
 from sim2real.progress import Bar
 from sim2real.sysid import invdyn, locate, report
-from sim2real.sysid.candidates import EFFECTS, library, scales_from
+from sim2real.sysid.candidates import ALL_EFFECTS, EFFECTS, library, scales_from
 from sim2real.sysid.derivatives import velocity_state
 from sim2real.sysid.export import write_fitted_mjcf
 from sim2real.sysid.fit import Fitter
@@ -109,9 +109,9 @@ class DiagnoseConfig:
         for key in ("num_windows", "top", "max_effects"):
             if getattr(self, key) < 1:
                 raise ValueError(f"{key}={getattr(self, key)}: must be >= 1")
-        unknown = set(self.effects) - set(EFFECTS)
+        unknown = set(self.effects) - set(ALL_EFFECTS)
         if unknown:
-            raise ValueError(f"effects: unknown effect(s) {sorted(unknown)}; the library has {', '.join(EFFECTS)}")
+            raise ValueError(f"effects: unknown effect(s) {sorted(unknown)}; the library has {', '.join(ALL_EFFECTS)}")
 
 
 def relative_change(before: float, after: float) -> str:

@@ -2,7 +2,7 @@
 
 For measured positions and their smoothed derivatives (``Trajectory``) and the recorded commands,
 
-    r(z) = qfrc_actuator(u, q, dq; z) + qfrc_known - qfrc_inverse(q, dq, ddq; z) - f_friction(dq; z)
+    r(z) = qfrc_actuator(u, q, dq; z) + qfrc_known - qfrc_inverse(q, dq, ddq; z) - f_damping(dq; z)
 
 per sample and DOF, with MuJoCo's own ``mj_forward`` / ``mj_inverse`` on the native model of
 ``z``. It differentiates noisy positions twice, so the diagnosis does not decide anything on it
@@ -48,9 +48,10 @@ def residual(system, z, trajs, idx) -> dict[str, np.ndarray]:
             mujoco.mj_inverse(m, d)
             inv[i] = d.qfrc_inverse
         fric = np.zeros_like(v)
-        if fx.fric_dof.size and len(v):
-            coef = _friction_coef(fx)(jnp.asarray(z, jnp.float32), jnp.asarray(v, jnp.float32))
-            fric[:, fx.fric_dof] = np.asarray(coef) * v[:, fx.fric_dof]
+        dofs = fx.damping_dofs
+        if dofs.size and len(v):
+            coef = _damping_coef(fx)(jnp.asarray(z, jnp.float32), jnp.asarray(v, jnp.float32))
+            np.add.at(fric, (slice(None), dofs), np.asarray(coef) * v[:, dofs])  # a dof may repeat
         out["r"].append(act + f - inv - fric)
         out["v"].append(v)
         out["a"].append(a)
@@ -59,10 +60,10 @@ def residual(system, z, trajs, idx) -> dict[str, np.ndarray]:
     return {k: np.concatenate(v) for k, v in out.items()}
 
 
-def _friction_coef(fx):
-    """``jit(vmap)`` of the Coulomb model's damping coefficient, once per effects object (run
-    eagerly it dispatches every small op for every row)."""
+def _damping_coef(fx):
+    """``jit(vmap)`` of the velocity-dependent damping coefficients (Coulomb friction, drag), once
+    per effects object (run eagerly it dispatches every small op for every row)."""
     f = fx.__dict__.get("_coef_jit")
     if f is None:
-        f = fx.__dict__["_coef_jit"] = jax.jit(jax.vmap(lambda z, v: fx.friction_damping(z, v)[1], in_axes=(None, 0)))
+        f = fx.__dict__["_coef_jit"] = jax.jit(jax.vmap(lambda z, v: fx.velocity_damping(z, v)[1], in_axes=(None, 0)))
     return f

@@ -18,7 +18,7 @@ import os
 
 import mujoco
 import numpy as np
-from mujoco import mjx
+from sim2real._mjx import mjx
 
 from sim2real.physics import catalog
 from sim2real.physics.effects import Effects, EffectsConfig

@@ -1,0 +1,57 @@
+"""Coulomb friction (with a per-direction asymmetry and a Stribeck breakaway term) on a joint.
+
+Written as ``f(v) = c(v) * v`` with ``c(v) = level(v) * tanh(v/eps) / v >= 0`` and added to the
+joint's damping for the sub-step: MuJoCo's integrators treat damping implicitly, so the stiff
+region near ``v = 0`` stays stable for any ``eps`` and the joint sticks instead of chattering,
+with no ``frictionloss`` structure in the compiled model (the MJX ``put_model`` pitfall).
+"""
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+
+from sim2real.physics.kinds.base import JOINT, Kind, rows, take
+
+
+class Coulomb(Kind):
+    owns = ("coulomb", "coulomb_asym", "stribeck", "stribeck_vel")
+    attach = JOINT
+    declares = {
+        "coulomb": (0.0, 0.0, 1e4, "N|Nm", "Coulomb friction level Fc opposing joint motion"),
+        "coulomb_asym": (0.0, -1.0, 1.0, "-", "asymmetry a: Fc(1+a) for positive, Fc(1-a) for negative velocity"),
+        "stribeck": (0.0, 0.0, 1e4, "N|Nm", "extra breakaway friction Fs at zero velocity (Stribeck)"),
+        "stribeck_vel": (0.1, 1e-4, 1e2, "m/s|rad/s", "Stribeck velocity vs: breakaway term decays as exp(-(v/vs)^2)"),
+    }
+    order = 51
+    effect = "coulomb_friction"
+
+    def damping_setup(self, m, spec, cfg):
+        joints = [p.index for _, p in spec.of_kind("coulomb")]
+        if not joints:
+            return None
+        dofs = np.array([m.jnt_dofadr[j] for j in joints], np.int32)
+        data = {k: rows(spec, k, joints) for k in self.owns}
+        data["eps"] = cfg.coulomb_eps
+        return dofs, data
+
+    def damping(self, data, z, qvel):
+        v = qvel
+        fc, asym = take(z, data["coulomb"]), take(z, data["coulomb_asym"])
+        fs, vs = take(z, data["stribeck"]), take(z, data["stribeck_vel"], 0.1)
+        level = fc * (1.0 + asym * jnp.sign(v)) + fs * jnp.exp(-jnp.square(v / vs))
+        eps = data["eps"]
+        safe_v = jnp.where(jnp.abs(v) > 1e-12, v, 1.0)
+        c = jnp.where(jnp.abs(v) > 1e-12, level * jnp.tanh(v / eps) / safe_v, level / eps)
+        return jnp.where(level > 0, c, 0.0)
+
+    def export(self, ctx, p, v) -> None:
+        # MuJoCo's frictionloss is the symmetric level; the asymmetry and Stribeck terms stay <numeric>
+        if p.kind == "coulomb" and (v > 0 or p.default > 0):
+            ctx.spec.joint(ctx.system.joints[p.index]).frictionloss = v
+
+    def candidates(self, system, sc, add, target) -> None:
+        jn = system.joints[target]
+        if system.declared_friction(jn):  # a declared frictionloss is re-fitted as a nominal parameter
+            return
+        F = sc.force[target]
+        add("coulomb_friction", jn, [f"coulomb:{jn}"], [(f * F,) for f in (0.03, 0.1, 0.3)], [0.1 * F], [(0.0, 2.0 * F)])

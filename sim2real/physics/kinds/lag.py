@@ -1,0 +1,31 @@
+"""Motor lag: a first-order filter on the actuator command (``Effects.actuate`` runs it in the
+command path); written into MJCF as MuJoCo's exact first-order filter."""
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from sim2real.physics.kinds.base import ACTUATOR, Kind
+
+
+class MotorLag(Kind):
+    owns = ("motor_lag",)
+    attach = ACTUATOR
+    declares = {"motor_lag": (0.0, 0.0, 1.0, "s", "time constant of a first-order lag on the actuator command")}
+    order = 63
+    effect = "motor_lag"
+    candidate_order = 60.5  # searched before the other actuator effects
+
+    def export(self, ctx, p, v) -> None:
+        # (an actuator with dynamics of its own cannot take a second filter: <numeric> only)
+        if v > 0 and ctx.system.mj.actuator_dyntype[p.index] == 0:
+            a = ctx.spec.actuator(ctx.system.actuators[p.index])
+            a.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
+            a.dynprm[0] = v
+            a.actlimited = 0
+
+    def candidates(self, system, sc, add, target) -> None:
+        an = system.actuators[target]
+        taus = np.geomspace(max(0.4 * sc.dt, 0.002), 0.25, 7)
+        add("motor_lag", an, [f"motor_lag:{an}"], [(t,) for t in taus], [float(taus[2])],
+            [(0.25 * float(taus[0]), 0.25)])

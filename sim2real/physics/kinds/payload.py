@@ -1,0 +1,129 @@
+"""A payload: a point mass on a body, at a ``payload_<body>`` site, its centre of mass, or a fitted
+distance along the link (``payload_r``); the diagnosis' ``mass_offset``."""
+from __future__ import annotations
+
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+
+from sim2real.physics import massprops
+from sim2real.physics.kinds.base import BODY, Kind, name_of
+from sim2real.physics.params import Param
+
+
+def link_axis(m: mujoco.MjModel, b: int) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """``(anchor, unit direction, length)`` of a body hinged to its parent: from the joint axis's
+    point through the centre of mass (body frame); None when the body has no hinge or its centre
+    of mass sits on the axis (a payload there is only a mass change)."""
+    if m.body_jntnum[b] != 1 or m.jnt_type[m.body_jntadr[b]] != mujoco.mjtJoint.mjJNT_HINGE:
+        return None
+    j = m.body_jntadr[b]
+    anchor = np.asarray(m.jnt_pos[j], float)
+    axis = np.asarray(m.jnt_axis[j], float)
+    r = np.asarray(m.body_ipos[b], float) - anchor
+    r = r - axis * np.dot(r, axis)  # the part perpendicular to the axis is what a payload acts through
+    length = float(np.linalg.norm(r))
+    if length < 1e-4:
+        return None
+    return anchor, r / length, length
+
+
+def position_params(m: mujoco.MjModel, bodies) -> list[Param]:
+    """``payload_r:<body>``: distance of a payload from the joint axis along the link (through the
+    centre of mass), for hinged bodies; the payload sits at the link's far end (twice the centre
+    of mass distance, the tip of a uniform link) by default."""
+    ps = []
+    for b in bodies:
+        ax = link_axis(m, b)
+        if ax is None:
+            continue
+        length = ax[2]
+        ps.append(Param(f"payload_r:{name_of(m, mujoco.mjtObj.mjOBJ_BODY, b)}", round(2 * length, 6), 0.0,
+                        round(4 * length, 6), "m", "distance of the payload from the joint axis, along the link",
+                        "payload_r", b))
+    return ps
+
+
+class Payload(Kind):
+    owns = ("payload", "payload_r")
+    attach = BODY
+    declares = {"payload": (0.0, 0.0, 1e3, "kg", "point mass at the body's payload_<body> site (else its centre of mass)")}
+    order = 30
+    effect = "mass_offset"
+
+    def setup(self, pm) -> None:
+        m = pm.mj
+        # where each body's payload sits: a site named payload_<body>, else the centre of mass
+        pm.payload_pos = {}
+        for _, p in pm.spec.of_kind("payload"):
+            name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, p.index)
+            sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, f"payload_{name}")
+            if sid >= 0:
+                if m.site_bodyid[sid] != p.index:
+                    raise ValueError(f"site 'payload_{name}' must belong to body '{name}'")
+                pm.payload_pos[p.index] = np.asarray(m.site_pos[sid], np.float32)
+        # a payload_r parameter places the payload along the link instead (anchor + r * direction)
+        pm.payload_axis = {}
+        for _, p in pm.spec.of_kind("payload_r"):
+            anchor, direction, _ = link_axis(m, p.index)
+            pm.payload_axis[p.index] = (np.asarray(anchor, np.float32), np.asarray(direction, np.float32))
+
+    def apply(self, pm, z, get, f) -> None:
+        where = {p.index: z[i] for i, p in pm.spec.of_kind("payload_r")}
+        for i, p in pm.spec.of_kind("payload"):
+            f.update(self._add(pm, get, p.index, z[i], where.get(p.index)))
+
+    @staticmethod
+    def _add(pm, get, b: int, mp, r=None):
+        """Point mass ``mp`` at distance ``r`` along the link (``payload_r``), else at the body's
+        ``payload_<body>`` site (its centre of mass if none).
+
+        Mass, centre of mass and inertia follow (parallel-axis theorem); the result is kept
+        diagonal in the body's principal frame, exact for a payload on a principal axis through
+        the centre of mass, as at the tip of a link.
+        """
+        m, c = get("body_mass")[b], get("body_ipos")[b]
+        if r is not None:
+            anchor, direction = pm.payload_axis[b]
+            p = jnp.asarray(anchor) + r * jnp.asarray(direction)
+        else:
+            p = jnp.asarray(pm.payload_pos.get(b, c))
+        rot = massprops.quat_to_mat(get("body_iquat")[b])
+        i_body = rot @ jnp.diag(get("body_inertia")[b]) @ rot.T
+        c_new = (m * c + mp * p) / (m + mp)
+
+        def shift(mass, r):
+            return mass * (jnp.dot(r, r) * jnp.eye(3) - jnp.outer(r, r))
+
+        total = i_body + shift(m, c - c_new) + shift(mp, p - c_new)
+        diag = jnp.diagonal(rot.T @ total @ rot)
+        return {"body_mass": get("body_mass").at[b].add(mp), "body_ipos": get("body_ipos").at[b].set(c_new),
+                "body_inertia": get("body_inertia").at[b].set(diag)}
+
+    def export(self, ctx, p, v) -> None:
+        if p.kind != "payload" or v <= 0:
+            return
+        system = ctx.system
+        bname = system.bodies[p.index]
+        if p.index in system.physics.payload_axis:  # along the link, at the fitted distance
+            anchor, direction = system.physics.payload_axis[p.index]
+            pos = np.asarray(anchor) + ctx.values[f"payload_r:{bname}"] * np.asarray(direction)
+        else:
+            pos = system.physics.payload_pos.get(p.index, system.mj.body_ipos[p.index])
+        child = ctx.spec.body(bname).add_body(name=f"payload_mass_{bname}", pos=list(map(float, pos)))
+        child.mass = v
+        child.inertia = [1e-6 * v] * 3
+        child.explicitinertial = True
+
+    def candidates(self, system, sc, add, target) -> None:
+        # a payload anywhere along a hinged link (bodies without a payload_r are only a mass change)
+        r_name = f"payload_r:{system.bodies[target]}"
+        if r_name not in system.spec:
+            return
+        bn = system.bodies[target]
+        mb = float(system.mj.body_mass[target])
+        p = system.spec[r_name]
+        L = p.default  # the link's far end
+        add("mass_offset", bn, [f"payload:{bn}", r_name],
+            [(f * mb, r * L) for f in (0.15, 0.4, 1.0) for r in (0.5, 1.0)], [0.3 * mb, 0.5 * L],
+            [(0.0, 5.0 * mb), (0.0, float(p.high))])
