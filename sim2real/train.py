@@ -80,9 +80,8 @@ class TrainConfig:
 
 
 def steps_per_update(cfg: TrainConfig, algo) -> int:
-    """Env steps per seed in one ``algo.update``: the PPO batch, or what the algorithm reports."""
-    f = getattr(algo, "env_steps_per_update", None)
-    return int(f()) if f is not None else cfg.ppo.batch_size
+    """Env steps per seed in one ``algo.update`` (``OuterLoop.env_steps_per_update``)."""
+    return int(algo.env_steps_per_update())
 
 
 def num_chunks(cfg: TrainConfig, algo) -> int:
@@ -99,7 +98,7 @@ def make_chunk(algo, updates: int):
     step) branch on it with a real ``lax.cond`` (under vmap a batched predicate turns ``cond``
     into a ``select`` that runs both branches at every update).
     """
-    takes_index = getattr(algo, "takes_update_index", False)
+    takes_index = algo.takes_update_index
 
     def body(c, i):
         return jax.vmap(lambda s: algo.update(s, i) if takes_index else algo.update(s))(c)
@@ -118,9 +117,33 @@ def strong_types(tree):
 
 
 def build_algo(cfg: TrainConfig, env):
+    """The configured outer loop, started from its warm start's policy where it names one."""
     from sim2real.algos import registry
 
-    return registry.build(cfg.algo, env, cfg)
+    algo = registry.build(cfg.algo, env, cfg)
+    if algo.warm_start_from:
+        algo.start_from(*_warm_start(algo.warm_start_from, algo, cfg.num_seeds))
+    return algo
+
+
+def _warm_start(run_dir: str, algo, num_seeds: int):
+    """``(params, obs_stats)`` of a finished run, checked against the run it starts."""
+    try:
+        wcfg, wenv, _, params, stats = load_policy(run_dir)
+    except FileNotFoundError as e:
+        raise FileNotFoundError(f"algo_options.warm_start: {e}") from e
+    env, name = algo.env, type(algo).__name__
+    if wenv.name != env.name or wenv.obs_size != env.obs_size:
+        raise ValueError(f"warm_start '{run_dir}' trained env '{wenv.name}' (obs {wenv.obs_size}), "
+                         f"this {name} runs '{env.name}' (obs {env.obs_size})")
+    if wcfg.ppo.net != algo.ppo.cfg.net:
+        raise ValueError(f"warm_start '{run_dir}' has network {wcfg.ppo.net}, this {name} has "
+                         f"ppo.net = {algo.ppo.cfg.net}; set the same ppo.net")
+    n = jax.tree_util.tree_leaves(params)[0].shape[0]
+    if n not in (1, num_seeds):
+        raise ValueError(f"warm_start '{run_dir}' holds {n} seeds; this run has num_seeds={num_seeds} "
+                         f"(set num_seeds={n}, or warm-start from a run with one seed)")
+    return params, stats
 
 
 class Run:
@@ -250,8 +273,7 @@ def train(cfg: TrainConfig) -> dict:
     seeds = jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds)
     # created under jit, so the state's arrays have exactly the layout chunk outputs have
     # (an eagerly built state costs a second compilation of the chunk on CPU)
-    init_fn = getattr(algo, "init_seeds", None) or jax.vmap(algo.init)  # init_seeds: warm starts
-    init = jax.jit(lambda k: strong_types(init_fn(k)))
+    init = jax.jit(lambda k: strong_types(algo.init_seeds(k)))  # (init_seeds: warm starts)
     chunk = make_chunk(algo, cfg.updates_per_chunk)
     per_update, n_chunks = steps_per_update(cfg, algo), num_chunks(cfg, algo)
     start = 0

@@ -132,16 +132,16 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
 
 
 def test_warm_start_must_match_the_network(tmp_path, udr_run):
-    from sim2real.algos import registry
+    from sim2real.train import build_algo  # (the driver reads warm starts; no algorithm reads run folders)
 
     env = make("prismatic", episode_length=20)
     cfg = driver_config(tmp_path, "algo=es_maml", "ppo.net.hidden=[8,8]",
                         f"algo_options={{population: 4, warm_start: {udr_run['run_dir']}}}")
     with pytest.raises(ValueError, match="network"):
-        registry.build("es_maml", env, cfg)
+        build_algo(cfg, env)
     cfg = driver_config(tmp_path, "algo=es_maml", f"algo_options.warm_start={tmp_path}/nothing")
     with pytest.raises(FileNotFoundError, match="nothing"):
-        registry.build("es_maml", env, cfg)
+        build_algo(cfg, env)
 
 
 def test_bad_config_is_named():

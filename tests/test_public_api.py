@@ -33,3 +33,27 @@ def test_mjx_import_drops_only_the_missing_warp_lines():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "ok mujoco.mjx"
+
+
+def test_an_algorithm_must_meet_the_outer_loop_contract():
+    from sim2real import config as config_lib
+    from sim2real.algos import registry
+    from sim2real.envs import make
+    from sim2real.train import TrainConfig
+
+    registry.register("not_a_loop", lambda env, cfg: object())
+    try:
+        with pytest.raises(TypeError, match="not an OuterLoop"):
+            registry.build("not_a_loop", make("pendulum"), config_lib.from_dict(TrainConfig, {}))
+    finally:
+        registry.BUILDERS.pop("not_a_loop")
+
+
+def test_no_algorithm_imports_the_driver():
+    """The driver sits above the algorithms: none of them imports ``sim2real.train``."""
+    import pathlib
+
+    root = pathlib.Path(importlib.import_module("sim2real.algos").__file__).parent
+    for path in root.glob("*.py"):
+        text = path.read_text()
+        assert "sim2real.train" not in text and "from sim2real import train" not in text, path.name

@@ -72,5 +72,51 @@ class DRSpace:
         return self.sub.names
 
 
+class OuterLoop:
+    """The contract between an outer-loop algorithm and the training driver (``train.py``).
+
+    The driver calls only what is declared here, jitted and vmapped over seeds; an algorithm
+    subclasses this, sets ``env`` and ``ppo`` (a :class:`~sim2real.rl.ppo.PPO`) and implements the
+    first three methods. The defaults say what an algorithm that does not override them gets.
+
+    Attributes:
+      takes_update_index: ``update`` is called as ``update(state, i)`` with the unbatched update
+        index (an algorithm that acts every n-th update branches on it with a real ``lax.cond``).
+      warm_start_from: a finished run folder whose policy starts this algorithm (set from the
+        algorithm's options); the driver reads it and calls :meth:`start_from` -- reading run
+        folders is the driver's, so no algorithm imports it.
+    """
+
+    takes_update_index: bool = False
+    warm_start_from: str = ""
+
+    def init(self, key) -> Any:
+        """One seed's state from a PRNG key."""
+        raise NotImplementedError
+
+    def update(self, state, i=None) -> tuple[Any, dict[str, Any]]:
+        """``(state, metrics)`` after one update (metrics: scalars or per-episode arrays)."""
+        raise NotImplementedError
+
+    def policy(self, state) -> tuple[Any, Any]:
+        """``(network params, observation statistics)``: what evaluation and export use."""
+        raise NotImplementedError
+
+    def init_seeds(self, keys) -> Any:
+        """States for every seed ``keys [S, 2]`` (default: ``init`` vmapped)."""
+        import jax
+
+        return jax.vmap(self.init)(keys)
+
+    def env_steps_per_update(self) -> int:
+        """Env steps per seed in one ``update`` (default: one PPO batch)."""
+        return int(self.ppo.cfg.batch_size)
+
+    def start_from(self, params, obs_stats) -> None:
+        """Start every seed from a finished run's policy (``[S or 1, ...]``); only algorithms that
+        set ``warm_start_from`` are asked."""
+        raise NotImplementedError(f"{type(self).__name__} takes no warm start")
+
+
 def metrics_mean(m: dict[str, Any]) -> dict[str, Any]:
     return {k: jnp.mean(v) for k, v in m.items()}

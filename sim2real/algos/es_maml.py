@@ -29,7 +29,7 @@ import optax
 from evosax.algorithms import Open_ES
 from flax import struct
 
-from sim2real.algos.base import DRConfig, DRSpace
+from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.algos.registry import register
 from sim2real.envs.base import Env
 from sim2real.evaluate import episodes
@@ -71,7 +71,7 @@ class ESMAMLState:
     step: jax.Array
 
 
-class ESMAML:
+class ESMAML(OuterLoop):
     """Static pieces; ``init(key)``, ``update(state) -> (state, metrics)``, ``adapt_and_evaluate``."""
 
     def __init__(self, env: Env, ppo_cfg: PPOConfig, dr: DRConfig, cfg: ESMAMLConfig):
@@ -92,7 +92,7 @@ class ESMAML:
         self.es = Open_ES(population_size=cfg.population, solution=template, use_antithetic_sampling=True,
                           optimizer=optax.adam(cfg.meta_lr), std_schedule=optax.constant_schedule(cfg.sigma))
         self.es_params = self.es.default_params
-        self.warm = None  # (params [S, ...], obs_stats [S, ...]) set by ``load_warm_start``
+        self.warm = None  # (params [S, ...], obs_stats [S, ...]) set by ``start_from``
 
     # ----------------------------------------------------------------------------------------
     def sample_task(self, key):
@@ -115,26 +115,11 @@ class ESMAML:
             return jax.vmap(self.init)(keys)
         return jax.vmap(self.init)(keys, *self.warm)
 
-    def load_warm_start(self, run_dir: str, num_seeds: int) -> None:
-        """Meta-parameters from a finished run's ``policy.msgpack``, checked against this ES-MAML."""
-        from sim2real.train import load_policy
-
-        try:
-            wcfg, wenv, _, params, stats = load_policy(run_dir)
-        except FileNotFoundError as e:
-            raise FileNotFoundError(f"algo_options.warm_start: {e}") from e
-        if wenv.name != self.env.name or wenv.obs_size != self.env.obs_size:
-            raise ValueError(f"warm_start '{run_dir}' trained env '{wenv.name}' (obs {wenv.obs_size}), "
-                             f"this ES-MAML runs '{self.env.name}' (obs {self.env.obs_size})")
-        if wcfg.ppo.net != self.ppo.cfg.net:
-            raise ValueError(f"warm_start '{run_dir}' has network {wcfg.ppo.net}, this ES-MAML has "
-                             f"ppo.net = {self.ppo.cfg.net}; set the same ppo.net")
+    def start_from(self, params, obs_stats) -> None:
+        """Meta-parameters from a finished run's policy (the driver checked its env and network)."""
         n = jax.tree_util.tree_leaves(params)[0].shape[0]
-        if n not in (1, num_seeds):
-            raise ValueError(f"warm_start '{run_dir}' holds {n} seeds; this run has num_seeds={num_seeds} "
-                             f"(set num_seeds={n}, or warm-start from a run with one seed)")
-        tile = lambda x: jnp.repeat(jnp.asarray(x), num_seeds // n, axis=0)
-        self.warm = jax.tree_util.tree_map(tile, (params, stats))
+        tile = lambda x: jnp.repeat(jnp.asarray(x), self.num_seeds // n, axis=0)  # noqa: E731
+        self.warm = jax.tree_util.tree_map(tile, (params, obs_stats))
 
     def theta(self, st: ESMAMLState):
         """Meta-parameters as the network's pytree (with the state's leading seed axes, if any)."""
@@ -218,8 +203,7 @@ def _build(env, cfg):
 
     opts = config_lib.from_dict(ESMAMLConfig, cfg.algo_options, "algo_options.")
     algo = ESMAML(env, cfg.ppo, cfg.dr, opts)
-    if opts.warm_start:
-        algo.load_warm_start(opts.warm_start, cfg.num_seeds)
+    algo.warm_start_from, algo.num_seeds = opts.warm_start, cfg.num_seeds
     return algo
 
 

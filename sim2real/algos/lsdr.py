@@ -30,7 +30,7 @@ from flax import struct
 
 from sim2real import config as config_lib
 from sim2real import dists
-from sim2real.algos.base import DRConfig, DRSpace
+from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.algos.registry import register
 from sim2real.dists import binned, gaussian
 from sim2real.envs.base import Env
@@ -97,7 +97,7 @@ class LSDRState:
     step: jax.Array
 
 
-class LSDR:
+class LSDR(OuterLoop):
     """LSDR (and EPOpt-LSDR) around PPO; also runs fixed uniform DR with ``learn_dist=False``."""
 
     def __init__(self, env: Env, ppo_cfg: PPOConfig, dr: DRConfig, cfg: LSDRConfig, num_updates: int,

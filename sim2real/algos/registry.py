@@ -1,4 +1,4 @@
-"""Algorithm names -> builders. Each algorithm has ``init(key)``, ``update(state)``, ``policy(state)``."""
+"""Algorithm names -> builders of ``OuterLoop``s (``algos/base.py`` states the contract)."""
 from __future__ import annotations
 
 from sim2real import config as config_lib
@@ -21,10 +21,17 @@ def register(name, builder):
 
 
 def build(name: str, env, cfg):
+    """The algorithm ``name`` for ``env`` and training config ``cfg`` (an ``OuterLoop``)."""
+    from sim2real.algos.base import OuterLoop
+
     _load_optional()
     if name not in BUILDERS:
         raise UnknownNameError(unknown_name_message("algo", name, sorted(BUILDERS)))
-    return BUILDERS[name](env, cfg)
+    algo = BUILDERS[name](env, cfg)
+    if not isinstance(algo, OuterLoop):
+        raise TypeError(f"algo '{name}' built a {type(algo).__name__}, not an OuterLoop (algos/base.py: the "
+                        "contract the training driver calls)")
+    return algo
 
 
 def _load_optional():

@@ -3,14 +3,14 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from sim2real.algos.base import DRConfig, DRSpace
+from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.dists import uniform
 from sim2real.envs.base import Env
 from sim2real.rl.ppo import PPO, PPOConfig, PPOState
 from sim2real.rl.rollout import Context
 
 
-class UDR:
+class UDR(OuterLoop):
     """PPO on z ~ U(box), resampled at every reset.
 
     State: :class:`PPOState`. ``update(state) -> (state, metrics)`` is one PPO iteration.
