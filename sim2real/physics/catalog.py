@@ -18,7 +18,6 @@ from sim2real.physics.kinds.gain import gain_law_entries, is_servo  # noqa: F401
 from sim2real.physics.kinds.mass import declare as body_mass_params  # noqa: F401
 from sim2real.physics.kinds.payload import link_axis  # noqa: F401
 from sim2real.physics.kinds.payload import position_params as payload_position_params  # noqa: F401
-
 from sim2real.physics.params import Param
 
 _JOINT, _ACT, _BODY, _GEOM = (

@@ -119,8 +119,6 @@ class Effects:
             gap_vel=jnp.zeros(nu),
         )
 
-    _take = staticmethod(take)
-
     def push(self, es: EffectState, ctrl) -> EffectState:
         """A new command ``[nu]`` enters the delay line (once per control step)."""
         return es.replace(action_buf=jnp.concatenate([ctrl[None], es.action_buf[:-1]], axis=0))
@@ -161,13 +159,13 @@ class Effects:
         """
         u = self.delayed(z, es, j, n)
         # first-order motor lag, exact discretisation over the sub-step
-        tau = self._take(z, self.r_lag)
+        tau = take(z, self.r_lag)
         alpha = 1.0 - jnp.exp(-h / jnp.maximum(tau, 1e-9))
         lagged = es.lag + alpha * (u - es.lag)
         u = jnp.where(tau > 0, lagged, u)
         lag_state = u
         # backlash: dead band between actuator and joint
-        b = self._take(z, self.r_backlash)
+        b = take(z, self.r_backlash)
         gap, gap_vel = es.gap, es.gap_vel
         if self.nu:
             half = 0.5 * b
@@ -176,9 +174,9 @@ class Effects:
             err = u - q
             servo_u = q + jnp.sign(err) * jnp.maximum(jnp.abs(err) - half, 0.0)
             # motor: torque reaches the joint only once the motor side has crossed the band
-            gain = jnp.where(self.r_gain >= 0, self._take(z, self.r_gain), self.act_gain)
+            gain = jnp.where(self.r_gain >= 0, take(z, self.r_gain), self.act_gain)
             torque = gain * u
-            inertia = jnp.where(self.r_binertia >= 0, self._take(z, self.r_binertia, 1.0), self.act_inertia)
+            inertia = jnp.where(self.r_binertia >= 0, take(z, self.r_binertia, 1.0), self.act_inertia)
             gv = gap_vel + h * torque / jnp.maximum(inertia, 1e-9)
             g = gap + h * gv
             hit_hi, hit_lo = g >= half, g <= -half
@@ -204,8 +202,8 @@ class Effects:
         """Measured joint positions ``[nq]``: offsets and white noise on effect joints."""
         if self.sense_qpos.size == 0:
             return qpos
-        off = self._take(z, self.r_off)
-        std = self._take(z, self.r_noise)
+        off = take(z, self.r_off)
+        std = take(z, self.r_noise)
         noise = std * jax.random.normal(key, off.shape)
         meas = qpos[self.sense_qpos] + off + noise
         return qpos.at[self.sense_qpos].set(jnp.where((off != 0) | (std > 0), meas, qpos[self.sense_qpos]))
@@ -214,7 +212,7 @@ class Effects:
         """Measured joint positions ``[nq]`` without noise: the true ones plus sensor offsets."""
         if self.sense_qpos.size == 0:
             return qpos
-        return qpos.at[self.sense_qpos].add(self._take(z, self.r_off))
+        return qpos.at[self.sense_qpos].add(take(z, self.r_off))
 
     def unsense(self, z, qpos_meas):
         """Joint positions ``[nq]`` implied by measured ones under ``z``'s sensor offsets (noise ignored).
@@ -224,5 +222,5 @@ class Effects:
         """
         if self.sense_qpos.size == 0:
             return qpos_meas
-        off = self._take(z, self.r_off)
+        off = take(z, self.r_off)
         return qpos_meas.at[self.sense_qpos].add(-off)

@@ -47,7 +47,6 @@ class PhysicsModel:
         self.mj = mj_model
         self.mx = mjx.put_model(mj_model)
         self.joint_damping_dofs = np.asarray(joint_damping_dofs, np.int32)
-        self.payload_pos, self.payload_axis = {}, {}  # (the payload plug-in's, read by the export)
         for k in self.kinds:
             k.setup(self)
         # parent chain for subtree masses (static)

@@ -13,6 +13,7 @@ import pkgutil
 from sim2real.physics.kinds.base import ACTUATOR, BODY, JOINT, Kind
 
 _REGISTRY: list[Kind] | None = None
+_OWNERS: dict[str, Kind] = {}
 
 
 def all_kinds() -> list[Kind]:
@@ -30,22 +31,20 @@ def all_kinds() -> list[Kind]:
             if k.owns and k not in seen:
                 seen.add(k)
                 found.append(k())
-        owners: dict[str, str] = {}
         for k in found:
             for kind in k.owns:
-                if kind in owners:
-                    raise RuntimeError(f"parameter kind '{kind}' is owned twice ({owners[kind]}, {type(k).__name__})")
-                owners[kind] = type(k).__name__
+                if kind in _OWNERS:
+                    raise RuntimeError(f"parameter kind '{kind}' is owned twice "
+                                       f"({type(_OWNERS[kind]).__name__}, {type(k).__name__})")
+                _OWNERS[kind] = k
         _REGISTRY = sorted(found, key=lambda k: (k.order, type(k).__name__))
     return _REGISTRY
 
 
 def owner(kind: str) -> Kind | None:
     """The plug-in that owns ``Param.kind`` ``kind`` (None: a kind no plug-in gives meaning to)."""
-    for k in all_kinds():
-        if kind in k.owns:
-            return k
-    return None
+    all_kinds()
+    return _OWNERS.get(kind)
 
 
 def attached(attach: str) -> list[Kind]:

@@ -96,9 +96,10 @@ def unit_for(unit: str, slide: bool) -> str:
     return unit.split("|")[0 if slide else -1]
 
 
-def first(current) -> float:
-    """MuJoCo >= 3.4 stores joint damping/stiffness as arrays (polynomial coefficients); older as floats."""
-    return float(np.ravel(current)[0])
+def coef(current, k: int = 0) -> float:
+    """Coefficient ``k`` of a joint's damping/stiffness: MuJoCo >= 3.4 stores them as arrays
+    (polynomial coefficients), older versions as floats."""
+    return float(np.ravel(current)[k])
 
 
 def set_coef(current, v: float, k: int = 0):
@@ -110,6 +111,12 @@ def set_coef(current, v: float, k: int = 0):
     if k:
         raise ValueError("this MuJoCo stores one damping coefficient; a polynomial term needs MuJoCo >= 3.4")
     return float(v)
+
+
+def add_magnitude(add, effect: str, target: str, param: str, c: float, top: float) -> None:
+    """A one-parameter hypothesis of typical size ``c``: screened at 3%, 10% and 30% of it, its
+    scale 10%, searched over ``[0, top * c]``."""
+    add(effect, target, [param], [(f * c,) for f in (0.03, 0.1, 0.3)], [0.1 * c], [(0.0, top * c)])
 
 
 def rows(spec, kind: str, ids) -> np.ndarray:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real.physics.kinds.base import JOINT, Kind, rows, take
+from sim2real.physics.kinds.base import JOINT, Kind, add_magnitude, rows, take
 
 
 class Coulomb(Kind):
@@ -53,5 +53,4 @@ class Coulomb(Kind):
         jn = system.joints[target]
         if system.declared_friction(jn):  # a declared frictionloss is re-fitted as a nominal parameter
             return
-        F = sc.force[target]
-        add("coulomb_friction", jn, [f"coulomb:{jn}"], [(f * F,) for f in (0.03, 0.1, 0.3)], [0.1 * F], [(0.0, 2.0 * F)])
+        add_magnitude(add, "coulomb_friction", jn, f"coulomb:{jn}", sc.force[target], 2.0)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real.physics.kinds.base import JOINT, Kind, rows, set_coef, take
+from sim2real.physics.kinds.base import JOINT, Kind, add_magnitude, coef, rows, set_coef, take
 
 
 class QuadraticDrag(Kind):
@@ -36,9 +36,9 @@ class QuadraticDrag(Kind):
     def export(self, ctx, p, v) -> None:
         if v > 0:
             j = ctx.spec.joint(ctx.system.joints[p.index])
-            j.damping = set_coef(j.damping, float(np.ravel(j.damping)[1]) + v, k=1)
+            j.damping = set_coef(j.damping, coef(j.damping, 1) + v, k=1)
 
     def candidates(self, system, sc, add, target) -> None:
         jn = system.joints[target]
         c = sc.force[target] / sc.speed[target] ** 2  # the force it takes at the joint's RMS speed
-        add("quadratic_drag", jn, [f"drag:{jn}"], [(f * c,) for f in (0.03, 0.1, 0.3)], [0.1 * c], [(0.0, 3.0 * c)])
+        add_magnitude(add, "quadratic_drag", jn, f"drag:{jn}", c, 3.0)

@@ -1,7 +1,7 @@
 """A joint spring a model leaves out (about the reference pose), added to the declared one."""
 from __future__ import annotations
 
-from sim2real.physics.kinds.base import JOINT, Kind, first, set_coef
+from sim2real.physics.kinds.base import JOINT, Kind, add_magnitude, coef, set_coef
 
 
 class Stiffness(Kind):
@@ -18,11 +18,11 @@ class Stiffness(Kind):
     def export(self, ctx, p, v) -> None:
         if v > 0:
             j = ctx.spec.joint(ctx.system.joints[p.index])
-            j.stiffness = set_coef(j.stiffness, first(j.stiffness) + v)
+            j.stiffness = set_coef(j.stiffness, coef(j.stiffness) + v)
 
     def candidates(self, system, sc, add, target) -> None:
         jn = system.joints[target]
         if system.declared_stiffness(jn):
             return
         k = sc.force[target] / (0.5 * sc.range[target])
-        add("joint_stiffness", jn, [f"stiffness:{jn}"], [(f * k,) for f in (0.03, 0.1, 0.3)], [0.1 * k], [(0.0, 3.0 * k)])
+        add_magnitude(add, "joint_stiffness", jn, f"stiffness:{jn}", k, 3.0)

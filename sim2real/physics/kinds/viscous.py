@@ -1,7 +1,7 @@
 """Viscous damping a model leaves out: added to the joint's declared damping."""
 from __future__ import annotations
 
-from sim2real.physics.kinds.base import JOINT, Kind, first, set_coef
+from sim2real.physics.kinds.base import JOINT, Kind, add_magnitude, coef, set_coef
 
 
 class Viscous(Kind):
@@ -18,11 +18,11 @@ class Viscous(Kind):
     def export(self, ctx, p, v) -> None:
         if v > 0:
             j = ctx.spec.joint(ctx.system.joints[p.index])
-            j.damping = set_coef(j.damping, first(j.damping) + v)
+            j.damping = set_coef(j.damping, coef(j.damping) + v)
 
     def candidates(self, system, sc, add, target) -> None:
         jn = system.joints[target]
         if system.declared_damping(jn):  # a declared damping is re-fitted as a nominal parameter
             return
         c = sc.force[target] / sc.speed[target]
-        add("viscous_damping", jn, [f"viscous:{jn}"], [(f * c,) for f in (0.03, 0.1, 0.3)], [0.1 * c], [(0.0, 3.0 * c)])
+        add_magnitude(add, "viscous_damping", jn, f"viscous:{jn}", c, 3.0)
