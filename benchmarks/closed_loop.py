@@ -79,8 +79,7 @@ def main():
     from sim2real import config as config_lib
     from sim2real import loop
     from sim2real.algos.base import DRConfig
-    from sim2real.simopt_run import SimOptRunConfig, run as simopt_run
-    from sim2real.train import TrainConfig
+    from sim2real.train import TrainConfig, train
 
     setup = SETUPS[args.env]
     plant = os.path.join(ROOT, setup["plant"])
@@ -130,14 +129,13 @@ def main():
         rets = []
         for s in range(S):
             paths = ctrl_rate[s]
-            cfg = SimOptRunConfig(name=f"simopt_{s}", out_dir=work, env=base.env, env_options=base.env_options,
-                                  seed=s, real="recordings", recordings=tuple(paths), progress=False, ppo=base.ppo,
-                                  dr=DRConfig(params=tuple(so["params"]), low=tuple(so["low"]), high=tuple(so["high"])),
-                                  simopt=dataclasses.replace(
-                                      SimOptRunConfig().simopt, init_std=tuple(so["init_std"]),
-                                      init_ppo_updates=int(base.total_steps // base.ppo.batch_size) - 100,
-                                      ppo_updates=100, real_rollouts=3))
-            res = simopt_run(cfg)
+            cfg = dataclasses.replace(
+                base, name=f"simopt_{s}", out_dir=work, seed=s, num_seeds=1, algo="simopt", updates_per_chunk=1,
+                progress=False, dr=DRConfig(params=tuple(so["params"]), low=tuple(so["low"]), high=tuple(so["high"])),
+                algo_options=dict(real="recordings", recordings=list(paths), init_std=list(so["init_std"]),
+                                  init_ppo_updates=int(base.total_steps // base.ppo.batch_size) - 100,
+                                  ppo_updates=100, real_rollouts=3))
+            res = train(cfg)
             rets += _scores(res["run_dir"], plant, args.episodes, 1)
         seconds["simopt"] = time.time() - t
         add("simopt", rets)

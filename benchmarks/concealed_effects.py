@@ -15,14 +15,12 @@ import argparse
 import dataclasses
 import csv
 import os
-import sys
 import tempfile
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from sim2real.envs.base import ASSETS  # noqa: E402
-from sim2real.sysid.generator import SYSTEMS, Case, record  # noqa: E402
+from sim2real.envs.base import ASSETS
+from sim2real.sysid.generator import SYSTEMS, Case, record
 
 # (effect, target, {param: value}) per system; magnitudes are a few to tens of percent of the
 # actuator's force range. Saturation limits are in actuator-force units (before the gear, as

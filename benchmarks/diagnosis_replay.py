@@ -18,8 +18,7 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import sysid_cases as sc  # noqa: E402
+import sysid_cases as sc
 
 root = sys.argv[1]
 emps_run = sys.argv[2]

@@ -11,10 +11,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import sysid_cases  # noqa: E402
+import sysid_cases
 
 OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "diagnosis_stability")
 DEFAULT_CASES = ("EMPS", "018_pendulum_geared_action_delay", "040_belt_stage_coulomb_friction@belt",

@@ -27,12 +27,10 @@ import argparse
 import csv
 import json
 import os
-import sys
 import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "es_maml_hopper")
@@ -160,7 +158,7 @@ def part_train(args):
             return
 
     # ES-MAML, warm-started from the uniform-DR MLP of each seed
-    from sim2real.train import load_policy
+    from sim2real.runs import load_policy
 
     cfg, env, _, params, stats = load_policy(os.path.join(args.out, "udr_mlp_run"))
     es = make_esmaml(env, cfg.ppo, args)

@@ -16,7 +16,7 @@ import numpy as np
 
 from sim2real.evaluate import episodes
 from sim2real.rl import normalize
-from sim2real.train import load_policy
+from sim2real.runs import load_policy
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 

@@ -10,7 +10,6 @@ import os
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)  # hopper_ppo's curve
 
 
 def main(argv):

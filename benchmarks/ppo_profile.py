@@ -33,8 +33,7 @@ from sim2real.envs.autoreset import step_autoreset
 from sim2real.rl.rollout import collect, to_ctrl
 from sim2real.train import TrainConfig, build_algo, make_chunk
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from hopper_ppo import load_args  # noqa: E402  (the same key=value + config= handling)
+from hopper_ppo import load_args  # (the same key=value + config= handling)
 
 
 def best_of(fn, arg, repeats=3):

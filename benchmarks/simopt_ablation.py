@@ -23,13 +23,9 @@ import argparse
 import csv
 import json
 import os
-import shutil
-import sys
 import time
 
 import numpy as np
-
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 EVAL_EPISODES = 64
@@ -51,27 +47,40 @@ TASKS = {
 
 def simopt_config(name, target, args):
     from sim2real import config as config_lib
-    from sim2real.simopt_run import SimOptRunConfig
+    from sim2real.train import TrainConfig
 
     tgt = "{" + ", ".join(f"'{k}': {v}" for k, v in target.items()) + "}"
-    cfg = config_lib.load(SimOptRunConfig, [
-        f"config={os.path.join(HERE, '..', 'configs', args.t['config'])}", f"name=simopt_{name}", f"out_dir={args.work}", "overwrite=true", "progress=false",
-        f"num_seeds={args.seeds}", f"target={tgt}",
-        f"simopt.init_ppo_updates={max(2, int(300 * args.scale))}",
-        f"simopt.ppo_updates={max(2, int(args.ppo_updates * args.scale))}",
-        f"simopt.num_samples={max(16, int(256 * args.scale))}", f"simopt.eval_episodes={EVAL_EPISODES}"])
+    cfg = config_lib.load(TrainConfig, [
+        f"config={os.path.join(HERE, '..', 'configs', args.t['config'])}", f"name=simopt_{name}", f"out_dir={args.work}",
+        "overwrite=true", "progress=false", "tensorboard=false", f"num_seeds={args.seeds}", f"algo_options.target={tgt}",
+        f"algo_options.init_ppo_updates={max(2, int(300 * args.scale))}",
+        f"algo_options.ppo_updates={max(2, int(args.ppo_updates * args.scale))}",
+        f"algo_options.num_samples={max(16, int(256 * args.scale))}", f"algo_options.eval_episodes={EVAL_EPISODES}"])
     return cfg
 
 
 def run_simopt(name, target, args):
-    from sim2real.simopt_run import run
+    """One SimOpt run (``train.py``, ``algo: simopt``); its metrics.csv / arrays.npz are copied out as
+    ``<name>_iterations.csv`` (one row per iteration and seed) and ``<name>_distribution.npz``
+    (``mean [I, S, D]``, ``cov [I, S, D, D]``: the distribution each iteration trained on; ``final_*``:
+    after the last update)."""
+    from sim2real.train import train
 
     cfg = simopt_config(name, target, args)
     t0 = time.time()
-    out = run(cfg)
+    out = train(cfg)
     print(f"[simopt {name}] {time.time() - t0:.0f} s", flush=True)
-    shutil.copy(os.path.join(out["run_dir"], "iterations.csv"), os.path.join(args.out, f"{name}_iterations.csv"))
-    shutil.copy(os.path.join(out["run_dir"], "distribution.npz"), os.path.join(args.out, f"{name}_distribution.npz"))
+    rd = out["run_dir"]
+    with open(os.path.join(rd, "metrics.csv")) as f:
+        rows = list(csv.DictReader(f))
+    with open(os.path.join(args.out, f"{name}_iterations.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=["iteration"] + [k for k in rows[0] if k != "update"])
+        w.writeheader()
+        w.writerows({"iteration": r["update"], **{k: v for k, v in r.items() if k != "update"}} for r in rows)
+    arrays = np.load(os.path.join(rd, "arrays.npz"))
+    np.savez(os.path.join(args.out, f"{name}_distribution.npz"), mean=np.swapaxes(arrays["dist_mean"], 0, 1),
+             cov=np.swapaxes(arrays["dist_cov"], 0, 1), final_mean=np.asarray(out["state"].mean),
+             final_cov=np.asarray(out["state"].cov), names=np.array(out["algo"].space.names))
     return cfg
 
 
@@ -80,7 +89,9 @@ def train_baseline(label, dr_args, args, so_cfg):
     from sim2real import config as config_lib
     from sim2real.train import TrainConfig, train
 
-    s = so_cfg.simopt
+    from sim2real.algos.simopt import SimOptConfig
+
+    s = config_lib.from_dict(SimOptConfig, so_cfg.algo_options)
     updates = (s.init_ppo_updates or s.ppo_updates) + s.iterations * s.ppo_updates
     p = so_cfg.ppo
     cfg = config_lib.load(TrainConfig, [

@@ -9,7 +9,8 @@ from sim2real.cli import main_guard
 
 
 def main(argv):
-    from sim2real.train import config_from_args, summary, train
+    from sim2real.runs import summary
+    from sim2real.train import config_from_args, train
 
     cfg = config_from_args(argv)
     out = train(cfg)

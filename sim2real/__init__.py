@@ -28,7 +28,7 @@ _EXPORTS = {
     "DRConfig": "sim2real.algos.base:DRConfig",
     "TrainConfig": "sim2real.train:TrainConfig",
     "train": "sim2real.train:train",
-    "load_policy": "sim2real.train:load_policy",
+    "load_policy": "sim2real.runs:load_policy",
     "DiagnoseConfig": "sim2real.sysid.diagnose:DiagnoseConfig",
     "diagnose": "sim2real.sysid.diagnose:diagnose",
     "load_recordings": "sim2real.sysid.recordings:load_all",

@@ -1,5 +1,12 @@
-"""Evaluate a trained policy over a set (or grid) of physics vectors, deterministically."""
+"""Evaluate a trained policy over a set (or grid) of physics vectors, deterministically.
+
+``evaluate_run(EvaluateConfig(...))`` is what ``scripts/evaluate.py`` runs: a run folder's policy
+over a grid of one or two physics parameters, written as ``returns.csv`` and a heat map.
+"""
 from __future__ import annotations
+
+import dataclasses
+import os
 
 import jax
 import jax.numpy as jnp
@@ -110,3 +117,108 @@ def parse_axis(text: str) -> tuple[str, np.ndarray]:
     if not np.all(np.isfinite(values)):
         raise ValueError(f"grid axis '{text}': values must be finite")
     return name, values
+
+
+@dataclasses.dataclass(frozen=True)
+class EvaluateConfig:
+    """Evaluation of a run's policy over a physics grid (``scripts/evaluate.py``).
+
+    Attributes:
+      run: the run folder (its latest checkpoint, or ``policy.msgpack`` without ``checkpoints/``).
+      x: first grid axis, ``name=low:high:count`` or ``name=v1,v2,...`` (a physics parameter).
+      y: optional second axis, same form.
+      episodes: deterministic episodes per grid cell and seed.
+      out: output folder (default ``<run>/eval``; only an evaluation folder is replaced).
+      seed: PRNG seed of the episodes' initial states.
+      adapt: adapt the policy to each cell first (ES-MAML's adaptation operator: few-shot evaluation);
+        the un-adapted returns go to ``returns_before.csv``.
+      progress: draw a progress bar.
+    """
+
+    run: str = ""
+    x: str = ""
+    y: str = ""
+    episodes: int = 4
+    out: str = ""
+    seed: int = 123
+    adapt: bool = False
+    progress: bool = True
+
+
+def evaluate_run(cfg: EvaluateConfig) -> dict:
+    """Evaluate every seed of ``cfg.run`` over the grid; writes ``returns.csv`` (+ ``returns_before.csv``
+    with ``adapt``) and ``returns.png`` into ``cfg.out`` (moved into place when complete).
+
+    Returns ``{'out', 'names', 'z' [N, P], 'returns' (grid-shaped, mean over seeds), 'before'}``.
+    Everything is checked (run folder, axes, names, bounds, adapt) before anything is written.
+    """
+    from sim2real import config as config_lib
+    from sim2real import output
+    from sim2real.plots import heatmap
+    from sim2real.progress import Bar
+    from sim2real.runs import load_policy, load_run
+
+    if not cfg.run or not cfg.x:
+        raise config_lib.ConfigError("evaluate needs run=RUN_DIR and x=name=low:high:count")
+    run = cfg.run
+    if not os.path.isdir(run) or not os.path.exists(os.path.join(run, "config.yaml")):
+        raise FileNotFoundError(f"run={run}: not a run folder (no config.yaml)")
+    if cfg.episodes < 1:
+        raise config_lib.ConfigError(f"episodes={cfg.episodes!r}: must be a positive integer")
+    try:
+        axes = dict([parse_axis(cfg.x)] + ([parse_axis(cfg.y)] if cfg.y else []))
+    except ValueError as e:
+        raise config_lib.ConfigError(str(e)) from None
+    out = cfg.out or os.path.join(run, "eval")
+    inputs = [os.path.join(run, "config.yaml")]
+    output.check(out, "evaluation", inputs=inputs, overwrite=True)
+    if os.path.isdir(os.path.join(run, "checkpoints")):
+        rcfg, env, algo, state = load_run(run)
+        all_params, all_stats = algo.policy(state)           # leading seed axis
+    else:  # a run folder copied without its checkpoints: the exported policies
+        rcfg, env, algo, all_params, all_stats = load_policy(run)
+    for n in axes:
+        env.spec.index(n)  # an unknown name lists the known ones
+    zs, names = grid(env, axes, base=algo.space.base if hasattr(algo, "space") else None)
+    env.check_z(zs)
+    if cfg.adapt and not hasattr(algo, "adapt"):
+        raise config_lib.ConfigError(f"adapt=true needs an algorithm with an adaptation operator "
+                                     f"(es_maml); run '{run}' trained algo '{rcfg.algo}'")
+    key = jax.random.PRNGKey(cfg.seed)
+    shape = [len(v) for v in axes.values()]
+    n_ep = cfg.episodes
+
+    def cell_adapted(params, stats, z, k):
+        # the same U as in meta-training, then the deterministic test episodes
+        p2, s2, _ = algo.adapt(params, stats, z, jax.random.fold_in(k, 1))
+        return episodes(env, algo.ppo, p2, s2, z[None], k, n_ep)["return"].mean()
+
+    adapted = jax.jit(jax.vmap(cell_adapted, in_axes=(None, None, 0, None)))
+    rets, before = [], []
+    label = f"{len(zs)} physics x {n_ep} episodes" + (", adapted first" if cfg.adapt else "")
+    with Bar(cfg.progress, rcfg.num_seeds * (1 + cfg.adapt), label) as bar:
+        for s in range(rcfg.num_seeds):
+            params, stats = jax.tree_util.tree_map(lambda x: x[s], (all_params, all_stats))
+            before.append(np.asarray(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"]).mean(1))
+            bar.step(text=f"seed {s}: evaluated")
+            if cfg.adapt:
+                rets.append(np.asarray(adapted(params, stats, jnp.asarray(zs), key)))
+                bar.step(text=f"seed {s}: adapted and evaluated")
+    ret = np.mean(rets if cfg.adapt else before, 0).reshape(shape)
+
+    def write(path, values):
+        with open(path, "w") as f:
+            f.write(",".join(names) + ",return\n")
+            for z, r in zip(zs, np.ravel(values)):
+                f.write(",".join(f"{z[env.spec.index(n)]:.6g}" for n in names) + f",{r:.6g}\n")
+
+    # written aside and moved into place when complete; only an evaluation folder is replaced
+    with output.staged(out, "evaluation", inputs=inputs, overwrite=True) as tmp:
+        write(os.path.join(tmp, "returns.csv"), ret)
+        if cfg.adapt:
+            write(os.path.join(tmp, "returns_before.csv"), np.mean(before, 0))
+        box = {n: (lo, hi) for n, lo, hi in zip(rcfg.dr.params, rcfg.dr.low, rcfg.dr.high)}
+        title = f"{rcfg.name}: mean return" + (" after adaptation" if cfg.adapt else "")
+        heatmap(axes, ret, os.path.join(tmp, "returns.png"), title=title, box=box)
+    return {"out": out, "names": names, "z": zs, "returns": ret,
+            "before": np.mean(before, 0).reshape(shape) if cfg.adapt else None}

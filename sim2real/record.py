@@ -276,7 +276,7 @@ def from_run(run_dir: str, target: str, episodes: int, seed: int = 0, run_seed: 
 
     Returns the rollouts and a description of what was rolled (for ``record.json``).
     """
-    from sim2real.train import load_policy
+    from sim2real.runs import load_policy
 
     cfg, env, algo, params, stats = load_policy(run_dir)
     if not 0 <= run_seed < cfg.num_seeds:

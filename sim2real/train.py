@@ -1,82 +1,29 @@
 """Training driver: chunks of ``jit(vmap_seeds(scan(update)))`` with logging and checkpoints between.
 
-The Python loop only logs (CSV, TensorBoard, a progress bar), checkpoints (orbax) and resumes;
+The one driver of every outer loop (``algos/base.py: OuterLoop``; UDR, LSDR, ES-MAML, SimOpt).
+The Python loop only logs (CSV, TensorBoard, a progress bar), checkpoints (orbax) and resumes
+(the run folder: ``runs.py``);
 everything inside a chunk is pure and jitted, so an interrupted run resumed from its checkpoint
 ends with the same parameters as an uninterrupted one (``tests/test_train.py``).
 """
 from __future__ import annotations
 
-import csv
 import dataclasses
 import json
 import os
 import time
 import warnings
-from typing import Any
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real import checkpoint, output, parallel
+from sim2real import checkpoint, parallel
 from sim2real import config as config_lib
-from sim2real.algos.base import DRConfig
 from sim2real.envs import make
-from sim2real.rl.ppo import PPOConfig
-
-
-@dataclasses.dataclass(frozen=True)
-class TrainConfig:
-    """One training run.
-
-    Attributes:
-      name: run name; the run folder is ``out_dir/name``.
-      env: env name (``sim2real.envs.names()``).
-      env_options: EnvConfig overrides, e.g. ``{episode_length: 500}``.
-      algo: ``udr`` (uniform DR; fixed physics when ``dr.params`` is empty), ``lsdr`` (with
-        ``algo_options.epopt`` for EPOpt-PPO), ``fixed_dr`` (LSDR's harness, distribution frozen),
-        ``es_maml`` (one update = one meta-iteration; ``ppo`` is its inner loop).
-      seed: base PRNG seed.
-      num_seeds: independent seeds trained in parallel (vmapped).
-      total_steps: env steps per seed (ES-MAML: the population's inner loops and scoring episodes).
-      updates_per_chunk: PPO iterations per jitted chunk (logging/checkpoint granularity).
-      checkpoint_every: chunks between checkpoints (the last chunk is always saved).
-      keep_checkpoints: how many checkpoints to keep.
-      out_dir: parent folder of run folders.
-      resume: continue from the latest checkpoint of ``out_dir/name``.
-      overwrite: delete an existing run folder instead of refusing to start.
-      max_chunks: stop after this many chunks in this invocation (0: run to the end).
-      tensorboard: also write TensorBoard event files.
-      progress: draw a progress bar.
-      ppo: PPO settings.
-      dr: domain-randomisation box.
-      algo_options: algorithm-specific settings (see the algorithm's config class).
-    """
-
-    name: str = "run"
-    env: str = "pendulum"
-    env_options: dict[str, Any] = dataclasses.field(default_factory=dict)
-    algo: str = "udr"
-    seed: int = 0
-    num_seeds: int = 1
-    total_steps: int = 1_000_000
-    updates_per_chunk: int = 10
-    checkpoint_every: int = 1
-    keep_checkpoints: int = 2
-    out_dir: str = "runs"
-    resume: bool = False
-    overwrite: bool = False
-    max_chunks: int = 0
-    tensorboard: bool = True
-    progress: bool = True
-    ppo: PPOConfig = PPOConfig()
-    dr: DRConfig = DRConfig()
-    algo_options: dict[str, Any] = dataclasses.field(default_factory=dict)
-
-    @property
-    def num_updates(self) -> int:
-        """PPO updates in ``total_steps`` (what the PPO-based algorithms anneal over)."""
-        return max(1, self.total_steps // self.ppo.batch_size)
+# TrainConfig and build_algo live with the run folder (``runs.py``, below the algorithms) and are
+# re-exported here: ``train(cfg)`` takes the one and calls the other
+from sim2real.runs import MetricsLogger, Progress, Run, TrainConfig, _without_warm_start, build_algo, export_policy
 
 
 def steps_per_update(cfg: TrainConfig, algo) -> int:
@@ -84,9 +31,10 @@ def steps_per_update(cfg: TrainConfig, algo) -> int:
     return int(algo.env_steps_per_update())
 
 
-def num_chunks(cfg: TrainConfig, algo) -> int:
-    """Chunks of ``updates_per_chunk`` updates that cover ``total_steps`` (at least one update)."""
-    updates = max(1, cfg.total_steps // steps_per_update(cfg, algo))
+def num_chunks(cfg: TrainConfig, algo, done: int = 0) -> int:
+    """Chunks of ``updates_per_chunk`` updates that cover the run (``OuterLoop.total_updates``:
+    ``total_steps`` worth, at least one; ``done``: updates before this call)."""
+    updates = algo.total_updates(cfg.total_steps, done)
     return -(-updates // cfg.updates_per_chunk)
 
 
@@ -114,67 +62,6 @@ def strong_types(tree):
     """The same arrays without weak types. The state goes in and out of the jitted chunk; a weakly
     typed leaf (evosax makes some) changes its input signature and compiles the chunk again."""
     return jax.tree_util.tree_map(lambda x: jax.lax.convert_element_type(x, jnp.asarray(x).dtype), tree)
-
-
-def build_algo(cfg: TrainConfig, env):
-    """The configured outer loop, started from its warm start's policy where it names one."""
-    from sim2real.algos import registry
-
-    algo = registry.build(cfg.algo, env, cfg)
-    if algo.warm_start_from:
-        algo.start_from(*_warm_start(algo.warm_start_from, algo, cfg.num_seeds))
-    return algo
-
-
-def _warm_start(run_dir: str, algo, num_seeds: int):
-    """``(params, obs_stats)`` of a finished run, checked against the run it starts."""
-    try:
-        wcfg, wenv, _, params, stats = load_policy(run_dir)
-    except FileNotFoundError as e:
-        raise FileNotFoundError(f"algo_options.warm_start: {e}") from e
-    env, name = algo.env, type(algo).__name__
-    if wenv.name != env.name or wenv.obs_size != env.obs_size:
-        raise ValueError(f"warm_start '{run_dir}' trained env '{wenv.name}' (obs {wenv.obs_size}), "
-                         f"this {name} runs '{env.name}' (obs {env.obs_size})")
-    if wcfg.ppo.net != algo.ppo.cfg.net:
-        raise ValueError(f"warm_start '{run_dir}' has network {wcfg.ppo.net}, this {name} has "
-                         f"ppo.net = {algo.ppo.cfg.net}; set the same ppo.net")
-    n = jax.tree_util.tree_leaves(params)[0].shape[0]
-    if n not in (1, num_seeds):
-        raise ValueError(f"warm_start '{run_dir}' holds {n} seeds; this run has num_seeds={num_seeds} "
-                         f"(set num_seeds={n}, or warm-start from a run with one seed)")
-    return params, stats
-
-
-class Run:
-    """A run folder: resolved config, metrics.csv, TensorBoard events, checkpoints/."""
-
-    def __init__(self, cfg: TrainConfig):
-        self.cfg = cfg
-        self.dir = os.path.join(cfg.out_dir, cfg.name)
-        self.ckpt_dir = os.path.abspath(os.path.join(self.dir, "checkpoints"))
-        self.metrics_path = os.path.join(self.dir, "metrics.csv")
-
-    def check(self) -> None:
-        """Refuse a run folder that may not be used (before anything is written)."""
-        cfg = self.cfg
-        if cfg.resume:
-            output.check(self.dir, "run", keep_existing=True, key="name")
-            if not os.path.exists(self.ckpt_dir):
-                raise FileNotFoundError(f"resume=true but '{self.ckpt_dir}' holds no checkpoint")
-        else:
-            if os.path.isdir(self.dir) and os.listdir(self.dir) and not cfg.overwrite:
-                raise FileExistsError(f"run folder '{self.dir}' exists; pass resume=true to continue it, "
-                                      "overwrite=true to replace it, or another name=")
-            output.check(self.dir, "run", overwrite=cfg.overwrite, key="name")
-
-    def prepare(self) -> None:
-        """Create the run folder (a folder sim2real did not make is never replaced:
-        ``sim2real.output``) and write the resolved config."""
-        self.check()
-        if not self.cfg.resume:
-            output.create(self.dir, "run", overwrite=self.cfg.overwrite, key="name")
-        config_lib.save(self.cfg, os.path.join(self.dir, "config.yaml"))
 
 
 def _use_cpu_cores():
@@ -219,7 +106,7 @@ def _saved_config(out_dir, name) -> str:
 def config_from_args(argv: list[str]) -> TrainConfig:
     """The command line's config. With ``resume=true`` the run's saved ``config.yaml`` is the config:
     ``name``/``out_dir`` (given, or read from ``config=``) find it, and other ``key=value``s may only
-    change ``RESUMABLE_KEYS`` (anything else is refused, listed)."""
+    change ``RESUMABLE_KEYS`` and the algorithm's resumable options (anything else is refused, listed)."""
     path, overrides = config_lib.parse_args(argv)
     if overrides.get("resume") is not True:
         return config_lib.load(TrainConfig, argv)
@@ -227,10 +114,11 @@ def config_from_args(argv: list[str]) -> TrainConfig:
         raise config_lib.ConfigError("resume=true and overwrite=true contradict each other; choose one")
     start = config_lib.load(TrainConfig, ([f"config={path}"] if path else []))
     saved = _saved_config(overrides.get("out_dir", start.out_dir), overrides.get("name", start.name))
-    bad = sorted(k for k in overrides if k not in RESUMABLE_KEYS + ("name", "out_dir"))
+    allowed = RESUMABLE_KEYS + _resumable_options(config_lib.load(TrainConfig, [f"config={saved}"]).algo)
+    bad = sorted(k for k in overrides if k not in allowed + ("name", "out_dir"))
     if bad:
         raise config_lib.ConfigError(f"resume=true continues the run with its saved config ({saved}); only "
-                                     f"{', '.join(RESUMABLE_KEYS)} may change, not {', '.join(bad)}")
+                                     f"{', '.join(allowed)} may change, not {', '.join(bad)}")
     return config_lib.load(TrainConfig, [f"config={saved}"] + [f"{k}={v if not isinstance(v, bool) else str(v).lower()}"
                                                               for k, v in overrides.items()])
 
@@ -239,14 +127,25 @@ def resume_config(cfg: TrainConfig) -> TrainConfig:
     """The config a run is resumed with: its saved ``config.yaml``, with only ``RESUMABLE_KEYS`` taken
     from ``cfg``; any other difference is refused with the list of differences."""
     saved = config_lib.load(TrainConfig, [f"config={_saved_config(cfg.out_dir, cfg.name)}"])
+    options = [k.split(".", 1)[1] for k in _resumable_options(saved.algo)]
     mine, theirs = config_lib.to_dict(cfg), config_lib.to_dict(saved)
+    for d in (mine, theirs):  # (the resumable options are compared by neither)
+        d["algo_options"] = {k: v for k, v in d["algo_options"].items() if k not in options}
     diffs = [f"{k}: run has {theirs[k]!r}, given {mine[k]!r}" for k in mine
              if k not in RESUMABLE_KEYS and mine[k] != theirs[k]]
     if diffs:
         raise config_lib.ConfigError("resume=true continues the run as it was configured; these settings differ "
                                      "from its saved config.yaml (give them as saved, or start a new run "
                                      "with another name=):\n  " + "\n  ".join(diffs))
-    return dataclasses.replace(saved, **{k: getattr(cfg, k) for k in RESUMABLE_KEYS})
+    opts = {**saved.algo_options, **{k: cfg.algo_options[k] for k in options if k in cfg.algo_options}}
+    return dataclasses.replace(saved, algo_options=opts, **{k: getattr(cfg, k) for k in RESUMABLE_KEYS})
+
+
+def _resumable_options(algo: str) -> tuple[str, ...]:
+    """``algo_options.<key>`` names that ``resume=true`` may change for ``algo`` (``algos.registry``)."""
+    from sim2real.algos import registry
+
+    return tuple(f"algo_options.{k}" for k in registry.resumable_options(algo))
 
 
 def train(cfg: TrainConfig) -> dict:
@@ -275,7 +174,7 @@ def train(cfg: TrainConfig) -> dict:
     # (an eagerly built state costs a second compilation of the chunk on CPU)
     init = jax.jit(lambda k: strong_types(algo.init_seeds(k)))  # (init_seeds: warm starts)
     chunk = make_chunk(algo, cfg.updates_per_chunk)
-    per_update, n_chunks = steps_per_update(cfg, algo), num_chunks(cfg, algo)
+    per_update = steps_per_update(cfg, algo)
     start = 0
     if cfg.resume:
         mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints, create=False)
@@ -288,11 +187,13 @@ def train(cfg: TrainConfig) -> dict:
             raise ValueError(f"resume=true: the checkpoint in '{run.ckpt_dir}' does not fit this run's state "
                              f"({str(e).splitlines()[0][:200]})") from None
         start = step
+        n_chunks = num_chunks(cfg, algo, done=start * cfg.updates_per_chunk)
         if start >= n_chunks:
             mngr.close()
             return {"state": state, "metrics": None, "run_dir": run.dir, "algo": algo, "env": env, "finished": True}
     else:
         state = init(seeds)
+        n_chunks = num_chunks(cfg, algo)
     run.prepare()  # the first write: config validated, algorithm built, checkpoint read
     mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints)
     logger = MetricsLogger(run, cfg, resume_from_update=start * cfg.updates_per_chunk, steps_per_update=per_update)
@@ -323,213 +224,6 @@ def train(cfg: TrainConfig) -> dict:
         logger.close()
     export_policy(algo, state, os.path.join(run.dir, "policy.msgpack"))
     return {"state": state, "metrics": last, "run_dir": run.dir, "algo": algo, "env": env, "finished": end == n_chunks}
-
-
-class MetricsLogger:
-    """metrics.csv (one row per update and seed) and TensorBoard scalars (seed means)."""
-
-    def __init__(self, run: Run, cfg: TrainConfig, resume_from_update: int, steps_per_update: int):
-        self.cfg, self.path, self.per_update = cfg, run.metrics_path, steps_per_update
-        self.arrays_path = os.path.join(run.dir, "arrays.npz")
-        self.arrays = {}
-        if resume_from_update and os.path.exists(self.arrays_path):
-            with np.load(self.arrays_path) as f:
-                self.arrays = {k: f[k][:, :resume_from_update] for k in f.files}
-        if resume_from_update and os.path.exists(self.path):
-            # drop rows logged after the checkpoint we resume from (the interrupted tail)
-            with open(self.path) as f:
-                rows = list(csv.DictReader(f))
-            keep = [r for r in rows if int(r["update"]) < resume_from_update]
-            self.header = list(rows[0].keys()) if rows else None
-            self._rewrite(keep)
-        else:
-            self.header = None
-            if os.path.exists(self.path):
-                os.remove(self.path)
-        self.tb = None
-        if cfg.tensorboard:
-            try:
-                from tensorboardX import SummaryWriter
-
-                self.tb = SummaryWriter(os.path.join(run.dir, "tb"))
-            except ImportError:  # optional at run time; declared in pyproject
-                self.tb = None
-        self.t_start = time.time()
-
-    def _rewrite(self, rows):
-        with open(self.path, "w", newline="") as f:
-            if self.header:
-                w = csv.DictWriter(f, fieldnames=self.header)
-                w.writeheader()
-                w.writerows(rows)
-
-    def write(self, chunk_index: int, metrics: dict, seconds: float):
-        cfg = self.cfg
-        arrays = {k: v for k, v in metrics.items() if np.ndim(v) > 2}
-        metrics = {k: v for k, v in metrics.items() if np.ndim(v) <= 2}
-        if arrays:
-            self._write_arrays(arrays)
-        names = sorted(metrics)
-        k = cfg.updates_per_chunk
-        header = ["update", "seed", "env_steps", "wall_seconds"] + names
-        new_file = not os.path.exists(self.path) or os.path.getsize(self.path) == 0
-        with open(self.path, "a", newline="") as f:
-            w = csv.writer(f)
-            if new_file:
-                w.writerow(header)
-            for j in range(k):
-                u = chunk_index * k + j
-                for s in range(cfg.num_seeds):
-                    w.writerow([u, s, (u + 1) * self.per_update, f"{time.time() - self.t_start:.2f}"]
-                               + [f"{float(metrics[n][s, j]):.6g}" for n in names])
-        if self.tb is not None:
-            u = (chunk_index + 1) * k
-            for n in names:
-                last = metrics[n][:, -1]
-                if np.isfinite(last).any():  # (no episode ended: no point, not a 0)
-                    self.tb.add_scalar(n, float(np.nanmean(last)), u * self.per_update)
-            self.tb.add_scalar("steps_per_second", k * self.per_update * cfg.num_seeds / seconds,
-                               u * self.per_update)
-
-    def _write_arrays(self, arrays: dict):
-        """Array-valued metrics (e.g. LSDR's distribution) -> ``arrays.npz``, ``[seed, update, ...]``."""
-        for k, v in arrays.items():
-            self.arrays[k] = np.concatenate([self.arrays[k], v], axis=1) if k in self.arrays else v
-        tmp = self.arrays_path + ".tmp.npz"
-        np.savez_compressed(tmp, **self.arrays)
-        os.replace(tmp, self.arrays_path)
-
-    def close(self):
-        if self.tb is not None:
-            self.tb.close()
-
-
-class Progress:
-    """rich progress bar: env steps, steps/s, latest episode return."""
-
-    def __init__(self, cfg: TrainConfig, total: int, done: int):
-        self.enabled = cfg.progress
-        if not self.enabled:
-            return
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress as RP, TextColumn, TimeRemainingColumn
-
-        self.p = RP(TextColumn(f"[bold]{cfg.name}[/] {cfg.env}/{cfg.algo}"), BarColumn(), MofNCompleteColumn(),
-                    TextColumn("{task.fields[info]}"), TimeRemainingColumn())
-        self.p.start()
-        self.task = self.p.add_task("train", total=total, completed=done, info="compiling...")
-        self.last_return = None
-
-    def advance(self, sps: float, steps: int, metrics: dict):
-        if not self.enabled:
-            return
-        ret = metrics.get("episode_return")
-        eps = metrics.get("episodes")
-        info = f"{sps:,.0f} steps/s"
-        if ret is not None and eps is not None and np.sum(eps) > 0:
-            self.last_return = episode_mean(ret, eps)
-        if self.last_return is not None:  # the last known return (no episode may end in a chunk)
-            info += f"  return {self.last_return:,.1f}"
-        elif "fitness_mean" in metrics:  # ES-MAML: return after adaptation, population mean
-            info += f"  fitness {np.mean(metrics['fitness_mean'][:, -1]):,.1f}"
-        self.p.update(self.task, advance=steps, info=info)
-
-    def close(self):
-        if self.enabled:
-            self.p.stop()
-
-
-def export_policy(algo, state, path: str) -> None:
-    """Write the policies of all seeds (params + observation statistics) as one msgpack file.
-
-    Small (no env state), so it travels where checkpoints are too big: evaluate it with
-    ``load_policy`` on another machine, e.g. in native MuJoCo.
-    """
-    from flax import serialization
-
-    params, stats = algo.policy(state)
-    tmp = path + ".tmp"
-    with open(tmp, "wb") as f:
-        f.write(serialization.to_bytes({"params": params, "obs_stats": stats}))
-    os.replace(tmp, path)
-
-
-def _without_warm_start(cfg: TrainConfig) -> TrainConfig:
-    """A saved run's config for loading it: its trained state replaces any warm start, so the
-    warm start's source need not exist any more."""
-    if "warm_start" not in cfg.algo_options:
-        return cfg
-    return dataclasses.replace(cfg, algo_options={k: v for k, v in cfg.algo_options.items() if k != "warm_start"})
-
-
-def _rebuild(run_dir: str):
-    """``(cfg, env, algo)`` of a saved run, from its ``config.yaml`` (without its warm start); a
-    SimOpt run folder (its config has ``simopt``) gives its ``SimOptRunConfig`` and ``SimOpt``."""
-    path = os.path.join(run_dir, "config.yaml")
-    if os.path.exists(path):
-        import yaml
-
-        with open(path) as f:
-            saved = yaml.safe_load(f) or {}
-        if isinstance(saved, dict) and "simopt" in saved:
-            from sim2real.simopt_run import SimOptRunConfig, build
-
-            cfg = config_lib.load(SimOptRunConfig, [f"config={path}"])
-            env, so, _ = build(cfg)
-            return cfg, env, so
-    cfg = config_lib.load(TrainConfig, [f"config={path}"])
-    env = make(cfg.env, **cfg.env_options)
-    return cfg, env, build_algo(_without_warm_start(cfg), env)
-
-
-def load_policy(run_dir: str):
-    """``(cfg, env, algo, params, obs_stats)`` from a run folder's ``policy.msgpack`` (leading seed axis)."""
-    from flax import serialization
-
-    path = os.path.join(run_dir, "policy.msgpack")
-    if not os.path.exists(path):
-        raise FileNotFoundError(f"no policy.msgpack in '{run_dir}' (was the run finished?)")
-    cfg, env, algo = _rebuild(run_dir)
-    template = jax.eval_shape(jax.vmap(algo.init), jax.random.split(jax.random.PRNGKey(0), cfg.num_seeds))
-    params, stats = jax.eval_shape(algo.policy, template)
-    zeros = jax.tree_util.tree_map(lambda x: np.zeros(x.shape, x.dtype), {"params": params, "obs_stats": stats})
-    with open(path, "rb") as f:
-        d = serialization.from_bytes(zeros, f.read())
-    return cfg, env, algo, d["params"], d["obs_stats"]
-
-
-def load_run(run_dir: str, step: int | None = None):
-    """Config, env, algorithm and restored state of a run folder (for evaluation)."""
-    cfg, env, algo = _rebuild(run_dir)
-    template = jax.jit(jax.vmap(algo.init))(jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds))
-    ckpt = os.path.join(run_dir, "checkpoints")
-    if not os.path.isdir(ckpt):
-        raise FileNotFoundError(f"no checkpoint in '{ckpt}'")
-    mngr = checkpoint.manager(ckpt, cfg.keep_checkpoints)
-    step = mngr.latest_step() if step is None else step
-    if step is None:
-        raise FileNotFoundError(f"no checkpoint in '{ckpt}'")
-    return cfg, env, algo, checkpoint.restore(mngr, step, template)
-
-
-def episode_mean(values, eps) -> float:
-    """Mean of a per-update episode statistic weighted by the episodes that ended in each update
-    (``values``, ``eps``: same shape; ``values`` is NaN where none ended, and weighs nothing there)."""
-    values, eps = np.asarray(values), np.asarray(eps)
-    return float(np.sum(np.where(eps > 0, values * eps, 0.0)) / np.sum(eps))
-
-
-def summary(metrics: dict) -> dict:
-    """Means over seeds and updates; episode statistics weighted by the episodes that ended."""
-    out = {k: float(np.nanmean(np.asarray(v))) if np.isfinite(np.asarray(v)).any() else float("nan")
-           for k, v in metrics.items()}
-    eps = np.asarray(metrics.get("episodes", 0))
-    for k in ("episode_return", "episode_length"):
-        if k in metrics:
-            if np.sum(eps) > 0:
-                out[k] = episode_mean(metrics[k], eps)
-            else:  # no episode ended in these updates: there is no episode statistic to report
-                del out[k]
-    return out
 
 
 def dumps(d: dict) -> str:

@@ -28,7 +28,7 @@ def _script(name):
     return mod
 
 
-SCRIPTS = {n: _script(n) for n in ("diagnose", "train", "evaluate", "simopt")}
+SCRIPTS = {n: _script(n) for n in ("diagnose", "train", "evaluate")}
 
 
 def _snapshot(folder):
@@ -186,7 +186,7 @@ CASES = [
      "low 2.0 must be below high 1.0"),
     ("train_box_lengths", "train", ["dr.params=[mass:pole]", "dr.low=[1,2]", "dr.high=[2]"], {}, "same length"),
     ("train_fixed_outside", "train", ["dr.fixed={mass:pole: -3}"], {}, "'mass:pole' = -3.0 is outside its physical bounds"),
-    ("train_env_option", "train", ["env_options.episode_lenght=10"], {}, "unknown env option(s) ['episode_lenght']"),
+    ("train_env_option", "train", ["env_options.episode_lenght=10"], {}, "unknown config key 'env_options.episode_lenght'. Did you mean: env_options.episode_length"),
     ("train_algo_option", "train", ["algo_options.alpha=1"], {}, "algo 'udr' takes no algo_options"),
     ("train_config_missing", "train", ["config=nope.yaml"], {}, "config file 'nope.yaml' not found"),
     ("train_config_yaml", "train", ["config=bad.yaml"], {"bad.yaml": "a: [1, 2\n"}, "config file 'bad.yaml' is not valid YAML"),
@@ -200,11 +200,21 @@ CASES = [
     # ---- evaluation -------------------------------------------------------------------------------------------
     ("eval_run_missing", "evaluate", ["run=nope", "x=mass:pole=1:2:3"], {}, "run=nope: not a run folder"),
     ("eval_needs_x", "evaluate", ["run=mine"], {}, "evaluate needs run=RUN_DIR and x="),
-    ("eval_unknown_arg", "evaluate", ["run=mine", "x=mass:pole=1:2:3", "episode=2"], {}, "unknown argument 'episode'"),
+    ("eval_unknown_arg", "evaluate", ["run=mine", "x=mass:pole=1:2:3", "episode=2"], {}, "unknown config key 'episode'. Did you mean: episodes"),
     # ---- SimOpt -----------------------------------------------------------------------------------------------
-    ("simopt_real_mode", "simopt", ["real=hardware"], {}, "real='hardware' unknown"),
-    ("simopt_no_recordings", "simopt", [f"config={os.path.join(ROOT, 'configs', 'simopt_pendulum.yaml')}",
-                                        "real=recordings"], {}, "real=recordings needs recordings="),
+    ("simopt_real_mode", "train", [f"config={os.path.join(ROOT, 'configs', 'simopt_pendulum.yaml')}",
+                                   "algo_options.real=hardware"], {}, "algo_options.real='hardware' unknown"),
+    ("simopt_no_recordings", "train", [f"config={os.path.join(ROOT, 'configs', 'simopt_pendulum.yaml')}",
+                                       "algo_options.real=recordings", "algo_options.target={}"], {},
+     "real=recordings needs algo_options.recordings="),
+    ("simopt_no_target", "train", ["algo=simopt", "updates_per_chunk=1", "dr.params=[mass:pole]", "dr.low=[0.5]",
+                                   "dr.high=[2]"], {}, "real=target needs algo_options.target="),
+    ("simopt_chunk", "train", [f"config={os.path.join(ROOT, 'configs', 'simopt_pendulum.yaml')}",
+                               "updates_per_chunk=10"], {}, "set updates_per_chunk=1"),
+    ("simopt_bad_recording", "train", [f"config={os.path.join(ROOT, 'configs', 'simopt_pendulum.yaml')}",
+                                       "algo_options.real=recordings", "algo_options.target={}",
+                                       "algo_options.recordings=[bad.csv]"], {"bad.csv": "time,qpos:hinge\n0,nan\n"},
+     "bad.csv"),
 ]
 
 

@@ -50,36 +50,22 @@ def test_roundtrip(tmp_path):
 
 
 def test_every_bundled_training_config_builds_its_algorithm():
-    """configs/*.yaml (training ones): keys valid, env and algorithm built (ES-MAML without its warm start,
-    which points at a run the user trains first)."""
+    """configs/*.yaml (SimOpt's too: one driver): keys valid, env and algorithm built (ES-MAML without
+    its warm start, which points at a run the user trains first)."""
     import glob
 
     from sim2real.envs import make
     from sim2real.train import TrainConfig, build_algo
 
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    paths = [p for p in sorted(glob.glob(os.path.join(root, "configs", "*.yaml"))) if "simopt" not in os.path.basename(p)]
-    assert len(paths) >= 6
+    paths = sorted(glob.glob(os.path.join(root, "configs", "*.yaml")))
+    assert len(paths) >= 8 and sum("simopt" in os.path.basename(p) for p in paths) >= 2
     for p in paths:
         cfg = config_lib.load(TrainConfig, [f"config={p}"])
         if cfg.algo == "es_maml":
             cfg = config_lib.load(TrainConfig, [f"config={p}", "algo_options.warm_start=''"])
         algo = build_algo(cfg, make(cfg.env, **cfg.env_options))
         assert algo is not None, p
-
-
-def test_every_bundled_simopt_config_builds():
-    import glob
-
-    from sim2real.simopt_run import SimOptRunConfig, build
-
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    paths = sorted(glob.glob(os.path.join(root, "configs", "simopt_*.yaml")))
-    assert len(paths) >= 2
-    for p in paths:
-        cfg = config_lib.load(SimOptRunConfig, [f"config={p}"])
-        so = build(cfg)[1]
-        assert len(so.space) == len(cfg.dr.params), p
 
 
 def test_progress_bar_closes_and_can_be_disabled():

@@ -15,7 +15,7 @@ def test_unknown_env_lists_known_names():
 
 
 def test_unknown_env_option():
-    with pytest.raises(TypeError, match="frame_skp"):
+    with pytest.raises(ValueError, match="frame_skp.*Did you mean: env_options.frame_skip"):
         make("pendulum", frame_skp=3)
 
 

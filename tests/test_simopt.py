@@ -198,36 +198,83 @@ def test_bad_config_is_named():
 
 
 # ------------------------------------------------------------------------------ the driver ----
-@pytest.mark.slow  # three driver runs; tracing the vmapped SimOpt iteration takes ~40 s each on 2 cores
+@pytest.mark.slow  # four driver runs; tracing the vmapped SimOpt iteration takes ~30 s each on 2 cores
 def test_driver_interrupted_and_resumed_equals_uninterrupted(tmp_path):
-    """``scripts/simopt.py`` driver: stop after one iteration, resume, end as an uninterrupted run
-    (distribution, policy, per-iteration CSV and history); the resumed run reuses the compiled
-    iteration (one function for the first and later iterations)."""
+    """SimOpt run by the one training driver (``algo: simopt``): stop after two iterations, resume,
+    end as an uninterrupted run (state, per-iteration metrics.csv and the distribution history in
+    arrays.npz); with recordings, ``resume=true`` may bring new ones (and nothing else)."""
     from sim2real import config as config_lib
-    from sim2real.simopt_run import SimOptRunConfig, run
+    from sim2real.train import TrainConfig, config_from_args, train
 
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
     def cfg(*extra):
-        return config_lib.load(SimOptRunConfig, [
+        return config_lib.load(TrainConfig, [
             f"config={root}/configs/simopt_pendulum.yaml", f"out_dir={tmp_path}", "progress=false",
-            "ppo.num_envs=8", "ppo.num_steps=16", "ppo.net.hidden=[16,16]", "simopt.iterations=2",
-            "simopt.init_ppo_updates=3", "simopt.ppo_updates=2", "simopt.num_samples=16",
-            "simopt.eval_episodes=0", *extra])
+            "tensorboard=false", "ppo.num_envs=8", "ppo.num_steps=16", "ppo.net.hidden=[16,16]",
+            "algo_options.iterations=2", "algo_options.init_ppo_updates=3", "algo_options.ppo_updates=2",
+            "algo_options.num_samples=16", "algo_options.eval_episodes=0", *extra])
 
-    full = run(cfg("name=full"))
-    part = run(cfg("name=part", "max_iterations=2"))
-    assert len(part["rows"]) == 2
-    resumed = run(cfg("name=part", "resume=true"))
-    assert [r["iteration"] for r in resumed["rows"]] == [2]
+    full = train(cfg("name=full"))
+    part = train(cfg("name=part", "max_chunks=2"))
+    assert not part["finished"]
+    resumed = train(cfg("name=part", "resume=true"))
+    assert resumed["finished"]
     for a, b in zip(jax.tree_util.tree_leaves(full["state"]), jax.tree_util.tree_leaves(resumed["state"])):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
-    lines = [open(tmp_path / n / "iterations.csv").read().splitlines() for n in ("full", "part")]
-    assert len(lines[0]) == 1 + 3
-    # identical rows apart from the wall-clock column
-    drop = lambda ln: [v for j, v in enumerate(ln.split(",")) if j != 2]
+    lines = [open(tmp_path / n / "metrics.csv").read().splitlines() for n in ("full", "part")]
+    assert len(lines[0]) == 1 + 3 and "mean:sensor_offset:hinge" in lines[0][0]
+    drop = lambda ln: [v for j, v in enumerate(ln.split(",")) if j != 3]  # (not the wall-clock column)
     assert [drop(x) for x in lines[0]] == [drop(x) for x in lines[1]]
-    d_full, d_part = (np.load(tmp_path / n / "distribution.npz") for n in ("full", "part"))
-    assert d_full["mean"].shape == (3, 1, 2)
-    for k in ("mean", "cov", "final_mean", "final_cov"):
+    d_full, d_part = (np.load(tmp_path / n / "arrays.npz") for n in ("full", "part"))
+    assert d_full["dist_mean"].shape == (1, 3, 2) and d_full["dist_cov"].shape == (1, 3, 2, 2)
+    for k in ("dist_mean", "dist_cov"):
         np.testing.assert_array_equal(d_full[k], d_part[k])
+
+    # the hardware loop: one iteration per call, each on recordings of the policy the last one wrote
+    so = full["algo"]
+    st = jax.tree_util.tree_map(lambda x: x[0], full["state"])
+    zt = jnp.asarray(so.z_target)
+    paths = save_recordings(so, so.target_rollouts(st, zt, jax.random.PRNGKey(3), 2), str(tmp_path / "rec"))
+    hw = cfg("name=hw", "algo_options.real=recordings", "algo_options.target={}",
+             f"algo_options.recordings=[{','.join(paths)}]")
+    first = train(hw)
+    again = config_from_args([f"out_dir={tmp_path}", "name=hw", "resume=true", f"algo_options.recordings=[{paths[0]}]"])
+    assert again.algo_options["recordings"] == [paths[0]] or again.algo_options["recordings"] == (paths[0],)
+    second = train(again)
+    rows = open(tmp_path / "hw" / "metrics.csv").read().splitlines()
+    assert [r.split(",")[0] for r in rows[1:]] == ["0", "1"]
+    assert not all(np.array_equal(np.asarray(a), np.asarray(b)) for a, b in
+                   zip(jax.tree_util.tree_leaves(first["state"]), jax.tree_util.tree_leaves(second["state"])))
+    with pytest.raises(config_lib.ConfigError, match="algo_options.num_samples"):
+        config_from_args([f"out_dir={tmp_path}", "name=hw", "resume=true", "algo_options.num_samples=8"])
+
+
+def test_simopt_runs_through_the_training_script(tmp_path, capsys):
+    """``python scripts/train.py config=configs/simopt_pendulum.yaml``: SimOpt is an outer loop of the
+    one driver; its run folder is read back like any other (``load_policy``)."""
+    import importlib.util
+
+    from sim2real.runs import load_policy
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    spec = importlib.util.spec_from_file_location("train_script", os.path.join(root, "scripts", "train.py"))
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    script.main([f"config={root}/configs/simopt_pendulum.yaml", f"out_dir={tmp_path}", "name=so", "progress=false",
+                 "tensorboard=false", "ppo.num_envs=8", "ppo.num_steps=16", "ppo.net.hidden=[16,16]",
+                 "algo_options.iterations=1", "algo_options.init_ppo_updates=2", "algo_options.ppo_updates=1",
+                 "algo_options.num_samples=16", "algo_options.eval_episodes=2", "algo_options.horizon=20"])
+    assert "run folder" in capsys.readouterr().out
+    rows = open(tmp_path / "so" / "metrics.csv").read().splitlines()
+    assert len(rows) == 1 + 2  # iterations + 1 updates, one seed
+    head = rows[0].split(",")
+    for col in ("mean:sensor_offset:hinge", "std:mass:pole", "eval_return", "reps_kl"):
+        assert col in head
+    # REPS moved the distribution away from its start after the first iteration
+    first, second = (dict(zip(head, r.split(","))) for r in rows[1:])
+    assert float(first["mean:sensor_offset:hinge"]) == 0.0
+    assert float(second["mean:sensor_offset:hinge"]) != 0.0 and np.isfinite(float(second["eval_return"]))
+    cfg, env, algo, params, stats = load_policy(str(tmp_path / "so"))
+    assert cfg.algo == "simopt" and type(algo).__name__ == "SimOpt"
+    assert jax.tree_util.tree_leaves(params)[0].shape[0] == 1

@@ -9,7 +9,8 @@ import pytest
 
 from sim2real import config as config_lib
 from sim2real.evaluate import episodes
-from sim2real.train import TrainConfig, load_run, train
+from sim2real.runs import load_run
+from sim2real.train import TrainConfig, train
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

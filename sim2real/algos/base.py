@@ -112,6 +112,12 @@ class OuterLoop:
         """Env steps per seed in one ``update`` (default: one PPO batch)."""
         return int(self.ppo.cfg.batch_size)
 
+    def total_updates(self, total_steps: int, done: int) -> int:
+        """Updates in the whole run, given the config's ``total_steps`` per seed and the updates
+        ``done`` before this call (a resumed run). Default: as many as ``total_steps`` buys; an
+        algorithm that counts its own iterations (SimOpt) says so here."""
+        return max(1, total_steps // self.env_steps_per_update())
+
     def start_from(self, params, obs_stats) -> None:
         """Start every seed from a finished run's policy (``[S or 1, ...]``); only algorithms that
         set ``warm_start_from`` are asked."""

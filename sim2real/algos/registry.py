@@ -14,10 +14,20 @@ def _udr(env, cfg):
 
 
 BUILDERS = {"udr": _udr}
+# algo -> the algo_options a resumed run may change (inputs each call brings anew, e.g. SimOpt's
+# recordings of the current policy); every other setting is the saved run's (``train.resume_config``)
+RESUMABLE_OPTIONS: dict[str, tuple[str, ...]] = {}
 
 
-def register(name, builder):
+def register(name, builder, resumable_options: tuple[str, ...] = ()):
     BUILDERS[name] = builder
+    RESUMABLE_OPTIONS[name] = tuple(resumable_options)
+
+
+def resumable_options(name: str) -> tuple[str, ...]:
+    """``algo_options`` keys of algorithm ``name`` that ``resume=true`` may change."""
+    _load_optional()
+    return RESUMABLE_OPTIONS.get(name, ())
 
 
 def build(name: str, env, cfg):
@@ -35,12 +45,12 @@ def build(name: str, env, cfg):
 
 
 def _load_optional():
-    # algorithms in their own modules register themselves on import
+    # every module of this package is imported once: an algorithm in its own module registers
+    # itself on import, so adding one is that file (plus its test), not a line here
     import importlib
+    import pkgutil
 
-    for mod in ("sim2real.algos.lsdr", "sim2real.algos.simopt", "sim2real.algos.es_maml"):
-        try:
-            importlib.import_module(mod)
-        except ModuleNotFoundError as e:
-            if e.name != mod:
-                raise
+    import sim2real.algos as pkg
+
+    for m in pkgutil.iter_modules(pkg.__path__):
+        importlib.import_module(f"{pkg.__name__}.{m.name}")

@@ -15,6 +15,13 @@ whole run is one ``jit`` and ``vmap``s over seeds), and :func:`real_from_recordi
 recordings on disk in the diagnosis tool's format (a hardware loop: record the current policy,
 run :meth:`SimOpt.adapt`, retrain, repeat).
 
+It is an outer loop like the others (``algo: simopt`` in a training config, run by ``train.py``):
+one ``update`` is one SimOpt iteration, one chunk of ``updates_per_chunk = 1`` update, so every
+iteration is checkpointed. With ``real: target`` a run is ``iterations + 1`` updates (the last one
+trains and evaluates on the final distribution); with ``real: recordings`` each call runs one
+iteration on the recordings it is given (``resume=true algo_options.recordings=[...]`` for the next,
+with recordings of the policy the last call wrote).
+
 Compared signals are the *measured* joint positions (with the sensor offsets of the parameters
 under test) followed by the joint velocities, ``[nq + nv]``; a simulation starts from the real
 rollout's measured initial state, corrected for the hypothesised sensor offsets.
@@ -28,8 +35,10 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
+from sim2real import config as config_lib
 from sim2real.algos import reps
-from sim2real.algos.base import DRConfig, DRSpace
+from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
+from sim2real.algos.registry import register
 from sim2real.dists import gaussian
 from sim2real.envs.base import Env
 from sim2real.evaluate import closed_loop
@@ -39,9 +48,14 @@ from sim2real.sysid import discrepancy
 
 @dataclasses.dataclass(frozen=True)
 class SimOptConfig:
-    """SimOpt settings (defaults: the paper's Tables III-IV where they apply).
+    """SimOpt settings (``algo_options`` of a run; defaults: the paper's Tables III-IV where they apply).
 
     Attributes:
+      real: where the real rollouts come from: ``target`` (a target env with hidden physics,
+        sim-to-sim) or ``recordings`` (files of the current policy on the real system).
+      target: hidden physics of the target env, ``{param: value}`` (``real: target``).
+      recordings: recording files of the current policy (``real: recordings``; the diagnosis'
+        formats, sampled at the env's control step).
       init_mean: initial mean per ``dr.params`` (empty: the env's defaults).
       init_std: initial standard deviation per ``dr.params`` (empty: 1/20 of the ``dr`` box width).
       iterations: SimOpt iterations (distribution updates from new real rollouts).
@@ -60,6 +74,9 @@ class SimOptConfig:
         (the env's episode length, whatever ``horizon`` is), not used by SimOpt itself; 0 disables.
     """
 
+    real: str = "target"
+    target: dict[str, float] = dataclasses.field(default_factory=dict)
+    recordings: tuple[str, ...] = ()
     init_mean: tuple[float, ...] = ()
     init_std: tuple[float, ...] = ()
     iterations: int = 5
@@ -109,8 +126,14 @@ class SimOptState:
     key: jax.Array
 
 
-class SimOpt:
-    """Static pieces; all methods are pure (jittable, vmappable over seeds)."""
+class SimOpt(OuterLoop):
+    """Static pieces; all methods are pure (jittable, vmappable over seeds).
+
+    ``update(state, i)`` is SimOpt iteration ``i`` against the configured real side
+    (``cfg.real``); ``iteration``/``adapt``/``train`` are its parts, for other drivers.
+    """
+
+    takes_update_index = True  # the first iteration trains longer (init_ppo_updates)
 
     def __init__(self, env: Env, ppo_cfg: PPOConfig, dr: DRConfig, cfg: SimOptConfig):
         if not dr.params:
@@ -144,6 +167,55 @@ class SimOpt:
                              "as the paper")
         # the policy is retrained every iteration from a warm start: a constant step size
         self.ppo = PPO(env, dataclasses.replace(ppo_cfg, anneal_lr=False), 1)
+        self.z_target, self.real = None, None
+        if cfg.real == "target":
+            if cfg.recordings:
+                raise config_lib.ConfigError("algo_options.recordings is read with real=recordings, not real=target")
+            if cfg.target:  # (without one only iteration()/adapt() can be used, with a target given to them)
+                self.z_target = env.z_of(**{k: float(v) for k, v in cfg.target.items()})
+                env.check_z(self.z_target)
+        elif cfg.real == "recordings":
+            if not cfg.recordings:
+                raise config_lib.ConfigError("algo_options.real=recordings needs algo_options.recordings=[a.csv, ...]: "
+                                             "recordings of the current policy on the real system")
+            # read now, before a run folder is made: a bad file is refused with nothing written
+            self.real = real_from_recordings(self, list(cfg.recordings))
+        else:
+            raise config_lib.ConfigError(f"algo_options.real={cfg.real!r} unknown: target, recordings")
+
+    # ------------------------------------------------------------- outer-loop contract ----
+    def update(self, st: SimOptState, i):
+        """SimOpt iteration ``i``: ``(state, metrics)``. Metrics: the distribution the policy was
+        trained on (``dist_mean [D]``, ``dist_cov [D, D]``, ``mean:<param>``, ``std:<param>``),
+        ``target_return``/``eval_return`` (NaN with recordings), ``train_return``, and the last
+        REPS update's ``reps_kl``, ``reps_ess``, ``reps_cost_min``, ``reps_cost_mean``."""
+        first = i == 0
+        if self.real is None:
+            if self.z_target is None:
+                raise config_lib.ConfigError("algo_options.real=target needs algo_options.target={param: value, ...}: "
+                                             "the hidden physics of the target env")
+            # a traced count: the first iteration and the later ones share one compiled function
+            n = jnp.where(first, self.updates_for(True), self.updates_for(False))
+            st, m = self.iteration(st, jnp.asarray(self.z_target), num_updates=n)
+        else:
+            st, m = self.hardware_iteration(st, self.real, first)
+        out = dict(dist_mean=m["mean"], dist_cov=m["cov"], target_return=m["target_return"],
+                   eval_return=m["eval_return"], train_return=m["train_return"])
+        for j, name in enumerate(self.space.names):
+            out[f"mean:{name}"] = m["mean"][j]
+            out[f"std:{name}"] = jnp.sqrt(m["cov"][j, j])
+        out.update({f"reps_{k}": m[f"reps_{k}"][-1] for k in ("kl", "ess", "cost_min", "cost_mean")})
+        return st, out
+
+    def env_steps_per_update(self) -> int:
+        """PPO env steps per seed in a later iteration (the first trains ``init_ppo_updates``; the
+        REPS rollouts in simulation are not counted)."""
+        return int(self.cfg.ppo_updates * self.ppo.cfg.batch_size)
+
+    def total_updates(self, total_steps: int, done: int) -> int:
+        """``iterations + 1`` against a target env; with recordings, one more than ``done`` (each
+        call adapts on the recordings it is given). ``total_steps`` is not used."""
+        return self.cfg.iterations + 1 if self.real is None else done + 1
 
     # ------------------------------------------------------------------ distribution ----
     def clip(self, xi):
@@ -281,6 +353,17 @@ class SimOpt:
                        **{f"reps_{k}": v for k, v in info.items()})
         return st, metrics
 
+    def hardware_iteration(self, st: SimOptState, real: RealData, first) -> tuple[SimOptState, dict]:
+        """Adapt on recorded rollouts of the current policy, then retrain (``first``: the policy
+        that made the recordings is trained first, ``init_ppo_updates``). Metrics as
+        :meth:`iteration` (``target_return``/``eval_return`` NaN: no target to score on)."""
+        st, _ = self.train(st, jnp.where(first, self.updates_for(True), 0))
+        mean, cov = st.mean, st.cov
+        st, info = self.adapt(st, real)
+        st, tm = self.train(st, self.cfg.ppo_updates)
+        return st, dict(mean=mean, cov=cov, target_return=jnp.nan, eval_return=jnp.nan, **tm,
+                        **{f"reps_{k}": v for k, v in info.items()})
+
     def updates_for(self, first: bool) -> int:
         """PPO updates in an iteration: ``init_ppo_updates`` (or ``ppo_updates``) for the first."""
         return (self.cfg.init_ppo_updates or self.cfg.ppo_updates) if first else self.cfg.ppo_updates
@@ -353,3 +436,17 @@ def save_recordings(sim: SimOpt, real: RealData, folder: str, prefix: str = "rea
     return paths
 
 
+
+
+def _build(env, cfg):
+    opts = config_lib.from_dict(SimOptConfig, cfg.algo_options, "algo_options.")
+    if cfg.updates_per_chunk != 1:
+        raise config_lib.ConfigError(f"updates_per_chunk={cfg.updates_per_chunk}: algo=simopt runs one SimOpt "
+                                     "iteration per chunk (each one checkpointed); set updates_per_chunk=1")
+    if opts.real == "target" and not opts.target:
+        raise config_lib.ConfigError("algo_options.real=target needs algo_options.target={param: value, ...}: "
+                                     "the hidden physics of the target env")
+    return SimOpt(env, cfg.ppo, cfg.dr, opts)
+
+
+register("simopt", _build, resumable_options=("recordings",))

@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 from flax import struct
+from sim2real import config as config_lib
 from sim2real._mjx import mjx
 
 from sim2real.physics import catalog, stepper
@@ -107,13 +108,10 @@ class Env:
 
     def __init__(self, config: EnvConfig | None = None, **overrides):
         cfg = config or self.default_config
-        unknown = set(overrides) - {f.name for f in dataclasses.fields(EnvConfig)}
-        if unknown:
-            raise TypeError(
-                f"unknown env option(s) {sorted(unknown)} for '{self.name}'; "
-                f"options: {[f.name for f in dataclasses.fields(EnvConfig)]}"
-            )
-        self.config = dataclasses.replace(cfg, **overrides)
+        # typed like every config (env_options of a training config land here): an unknown key
+        # gets a "did you mean", a value of the wrong type names its key
+        given = config_lib.from_dict(EnvConfig, overrides, "env_options.")
+        self.config = dataclasses.replace(cfg, **{k: getattr(given, k) for k in overrides})
         if self.config.out_of_bounds not in OUT_OF_BOUNDS:
             raise ValueError(f"env '{self.name}': out_of_bounds={self.config.out_of_bounds!r}; "
                              f"choose one of {list(OUT_OF_BOUNDS)}")
