@@ -191,3 +191,40 @@ def test_servo_backlash_leaves_a_dead_band():
     with_band = float(final_q(jnp.asarray(env.z_of(**{"backlash:drive": 0.004}))))
     assert abs(nominal) < 1e-4          # the servo reaches the target
     assert abs(with_band) > 0.9e-3      # the target sits inside the band: no motion
+
+
+def test_a_new_command_path_stage_is_one_plug_in(monkeypatch):
+    """A kind with a ``command`` hook joins the command path at its ``command_order`` with nothing
+    else changed: declared on every actuator, neutral at its default, acting after the delay line."""
+    from sim2real.envs import make
+    from sim2real.physics import catalog, kinds
+    from sim2real.physics.kinds.base import ACTUATOR, Kind, rows, take
+
+    class CommandBias(Kind):  # (a toy: a constant bias added to the command)
+        owns = ("command_bias",)
+        attach = ACTUATOR
+        declares = {"command_bias": (0.0, -1.0, 1.0, "actuator units", "constant bias on the command")}
+        order = 64
+        command_order = 15  # after the delay line, before the motor lag
+
+        def command_setup(self, m, spec, cfg):
+            return {"rows": rows(spec, "command_bias", np.arange(m.nu))}
+
+        def command(self, data, z, state, u, j, n, qpos, h):
+            return u + take(z, data["rows"]), state
+
+    plug = CommandBias()
+    monkeypatch.setattr(kinds, "_REGISTRY", sorted(kinds.all_kinds() + [plug], key=lambda k: k.order))
+    monkeypatch.setitem(kinds._OWNERS, "command_bias", plug)
+    # (what importing the module would have done: its declaration in the catalog's table)
+    monkeypatch.setitem(catalog.ACTUATOR_EFFECTS, "command_bias", plug.declares["command_bias"])
+    env = make("pendulum")
+    assert "command_bias:motor" in env.spec
+    fx, qpos = env.effects, jnp.zeros(env.mj_model.nq)
+    ctrl = jnp.asarray([0.3], jnp.float32)
+    es = fx.push(fx.init_state(), ctrl)
+    u, _ = fx.actuate(jnp.asarray(env.default_z()), es, 0, 1, qpos, env.dt)
+    np.testing.assert_array_equal(np.asarray(u), np.asarray(ctrl))          # neutral by default
+    z = env.z_of(**{"command_bias:motor": 0.25, "action_delay": 1.0})
+    u, _ = fx.actuate(jnp.asarray(z), es, 0, 1, qpos, env.dt)
+    assert float(u[0]) == pytest.approx(0.25)                               # the delayed command (0) + bias

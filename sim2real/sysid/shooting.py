@@ -248,7 +248,7 @@ class Shooting:
         sys = self.sys
         fx = sys.effects
         zs = jax.vmap(lambda z: clip(sys.spec, z))(zs)
-        rows = [r for r in (fx.r_delay,) if r >= 0] + [int(r) for r in np.concatenate([fx.r_lag, fx.r_backlash]) if r >= 0]
+        rows = [int(r) for r in fx.command_rows]
         # the command path's memory matters only when some physics in the batch has a delay, lag or
         # backlash (or the model has activations); otherwise its states are the initial ones
         needed = jnp.any(zs[:, np.array(rows, np.int32)] > 0) if rows else jnp.zeros((), bool)

@@ -13,13 +13,13 @@ hook                who calls it
 ``apply``           ``PhysicsModel.apply``: the ``mjx.Model`` fields a value changes (in ``order``)
 ``damping``         ``Effects.velocity_damping``: a velocity-dependent force written as damping
                     (implicit in MuJoCo's integrator, so stiff laws stay stable)
+``command``         ``Effects.actuate``: a stage of the command path, in ``command_order``
+                    (delay line 10 -> motor lag 20 -> backlash 30), with its own memory
+                    (``command_state``; ``push`` once per control step)
+``sense``           ``Effects.sense`` / ``measure`` / ``unsense``: how a measured position is made
 ``export``          ``sysid.export``: the fitted value written into the user's ``MjSpec``
 ``candidates``      ``sysid.candidates.library``: the hypotheses the diagnosis searches
 ==================  ============================================================================
-
-The command path (delay line, motor lag, backlash) keeps its state in ``EffectState`` and runs in
-one fixed pipeline (``effects.Effects.actuate``): its kinds declare, export and offer candidates
-here, but their dynamics stay together, where their order is visible.
 """
 from __future__ import annotations
 
@@ -73,6 +73,47 @@ class Kind:
 
     def damping(self, data, z, qvel):
         """``[J]`` damping to add on its dofs for this physics sub-step (zero where off)."""
+        raise NotImplementedError
+
+    # ------------------------------------------------- command path and sensing -------
+    # A stage of the command path sees the command after the stages before it (``command_order``)
+    # and keeps its memory in the effect state under its first ``owns`` name.
+    command_order: float | None = None
+
+    def command_setup(self, m: mujoco.MjModel, spec, cfg):
+        """Static data for ``command``, or None when this kind is not on this model's command path."""
+        return None
+
+    def command_state(self, data, ctrl):
+        """Its memory with the drive at rest under ``ctrl [nu]`` (a pytree; zeros: a fresh start)."""
+        return ()
+
+    def push(self, data, state, ctrl):
+        """A new command ``[nu]`` arrives (once per control step)."""
+        return state
+
+    def command(self, data, z, state, u, j, n: int, qpos, h: float):
+        """``(u [nu], state)`` for physics sub-step ``j`` of ``n`` (``h`` seconds; ``qpos [nq]`` true)."""
+        raise NotImplementedError
+
+    def command_rows(self, data) -> list[int]:
+        """Rows of ``z`` whose value > 0 switches this stage on (its memory then matters)."""
+        return []
+
+    def sense_setup(self, m: mujoco.MjModel, spec):
+        """Static data for ``sense``/``measure``/``unsense``, or None when this kind changes no measurement."""
+        return None
+
+    def sense(self, data, z, qpos, key):
+        """Measured positions ``[nq]`` from ``qpos [nq]`` (``key``: for noise)."""
+        raise NotImplementedError
+
+    def measure(self, data, z, qpos):
+        """Measured positions without noise."""
+        raise NotImplementedError
+
+    def unsense(self, data, z, qpos_meas):
+        """True positions implied by measured ones (noise ignored)."""
         raise NotImplementedError
 
     # ---------------------------------------------------------------- sysid ------------

@@ -1,5 +1,7 @@
-"""Action delay, in control steps (fractional steps are exact; ``Effects.delayed`` runs the delay line)."""
+"""Action delay, in control steps (fractional steps are exact): the first stage of the command path."""
 from __future__ import annotations
+
+import jax.numpy as jnp
 
 from sim2real.physics.kinds.base import Kind
 
@@ -8,6 +10,40 @@ class ActionDelay(Kind):
     owns = ("action_delay",)
     order = 70
     effect = "action_delay"
+    command_order = 10
+
+    def command_setup(self, m, spec, cfg):
+        if "action_delay" not in spec:
+            return None
+        return {"row": spec.index("action_delay"), "length": cfg.max_delay + 2, "nu": m.nu}
+
+    def command_state(self, data, ctrl):
+        """``[D + 2, nu]`` past commands, newest first."""
+        return jnp.broadcast_to(ctrl, (data["length"], data["nu"]))
+
+    def push(self, data, buf, ctrl):
+        return jnp.concatenate([ctrl[None], buf[:-1]], axis=0)
+
+    def command(self, data, z, buf, u, j, n, qpos, h):
+        """The command applied during sub-step ``j`` of ``n``.
+
+        A delay of ``d`` control steps (fractional allowed) shifts the piecewise-constant command
+        by ``d``; sub-step ``j`` spans ``[j/n, (j+1)/n)`` of the step, so it sees the shifted
+        command averaged over that span -- at most two neighbouring commands, weighted by how
+        much of the span each covers. Exact for any ``d`` and ``n``; with ``n = 1`` it is the
+        blend ``(1 - f) u[k] + f u[k+1]`` of the fractional part ``f``.
+        """
+        d = z[data["row"]]
+        a = j / n - d                        # start of the span, in steps, relative to this step
+        ka = jnp.floor(a)
+        w = jnp.clip((ka + 1.0 - a) * n, 0.0, 1.0)   # share of the span inside step ka
+        i = jnp.clip(-ka, 0, buf.shape[0] - 1).astype(jnp.int32)
+        newer = jnp.maximum(i - 1, 0)
+        delayed = w * buf[i] + (1.0 - w) * buf[newer]
+        return jnp.where(d > 0, delayed, u), buf
+
+    def command_rows(self, data):
+        return [data["row"]]
 
     def candidates(self, system, sc, add, target) -> None:
         if not system.mj.nu:

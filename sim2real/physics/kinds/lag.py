@@ -1,11 +1,12 @@
-"""Motor lag: a first-order filter on the actuator command (``Effects.actuate`` runs it in the
-command path); written into MJCF as MuJoCo's exact first-order filter."""
+"""Motor lag: a first-order filter on the actuator command (the command path's second stage);
+written into MJCF as MuJoCo's exact first-order filter."""
 from __future__ import annotations
 
+import jax.numpy as jnp
 import mujoco
 import numpy as np
 
-from sim2real.physics.kinds.base import ACTUATOR, Kind
+from sim2real.physics.kinds.base import ACTUATOR, Kind, rows, take
 
 
 class MotorLag(Kind):
@@ -15,6 +16,25 @@ class MotorLag(Kind):
     order = 63
     effect = "motor_lag"
     candidate_order = 60.5  # searched before the other actuator effects
+    command_order = 20
+
+    def command_setup(self, m, spec, cfg):
+        r = rows(spec, "motor_lag", np.arange(m.nu))
+        return {"rows": r} if (r >= 0).any() else None
+
+    def command_state(self, data, ctrl):
+        """``[nu]`` the filter's output."""
+        return jnp.asarray(ctrl, jnp.float32) + jnp.zeros(len(data["rows"]))
+
+    def command(self, data, z, lag, u, j, n, qpos, h):
+        # exact discretisation over the sub-step
+        tau = take(z, data["rows"])
+        alpha = 1.0 - jnp.exp(-h / jnp.maximum(tau, 1e-9))
+        u = jnp.where(tau > 0, lag + alpha * (u - lag), u)
+        return u, u
+
+    def command_rows(self, data):
+        return [int(r) for r in data["rows"] if r >= 0]
 
     def export(self, ctx, p, v) -> None:
         # (an actuator with dynamics of its own cannot take a second filter: <numeric> only)
