@@ -1,6 +1,6 @@
-"""A plain rich progress bar for the loops of the scripts (fits, SimOpt iterations, evaluation).
+"""A plain rich progress bar for the loops of the scripts (fits, evaluation, recording).
 
-The training driver has its own bar (steps/s and return columns, ``sim2real.train.Progress``).
+The training driver has its own bar (steps/s and return columns, ``sim2real.runs.Progress``).
 """
 from __future__ import annotations
 
