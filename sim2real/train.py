@@ -9,7 +9,6 @@ ends with the same parameters as an uninterrupted one (``tests/test_train.py``).
 from __future__ import annotations
 
 import dataclasses
-import json
 import os
 import time
 import warnings
@@ -114,7 +113,8 @@ def config_from_args(argv: list[str]) -> TrainConfig:
         raise config_lib.ConfigError("resume=true and overwrite=true contradict each other; choose one")
     start = config_lib.load(TrainConfig, ([f"config={path}"] if path else []))
     saved = _saved_config(overrides.get("out_dir", start.out_dir), overrides.get("name", start.name))
-    allowed = RESUMABLE_KEYS + _resumable_options(config_lib.load(TrainConfig, [f"config={saved}"]).algo)
+    options = _resumable_options(config_lib.load(TrainConfig, [f"config={saved}"]).algo)
+    allowed = RESUMABLE_KEYS + tuple(f"algo_options.{k}" for k in options)
     bad = sorted(k for k in overrides if k not in allowed + ("name", "out_dir"))
     if bad:
         raise config_lib.ConfigError(f"resume=true continues the run with its saved config ({saved}); only "
@@ -127,7 +127,7 @@ def resume_config(cfg: TrainConfig) -> TrainConfig:
     """The config a run is resumed with: its saved ``config.yaml``, with only ``RESUMABLE_KEYS`` taken
     from ``cfg``; any other difference is refused with the list of differences."""
     saved = config_lib.load(TrainConfig, [f"config={_saved_config(cfg.out_dir, cfg.name)}"])
-    options = [k.split(".", 1)[1] for k in _resumable_options(saved.algo)]
+    options = _resumable_options(saved.algo)
     mine, theirs = config_lib.to_dict(cfg), config_lib.to_dict(saved)
     for d in (mine, theirs):  # (the resumable options are compared by neither)
         d["algo_options"] = {k: v for k, v in d["algo_options"].items() if k not in options}
@@ -142,10 +142,10 @@ def resume_config(cfg: TrainConfig) -> TrainConfig:
 
 
 def _resumable_options(algo: str) -> tuple[str, ...]:
-    """``algo_options.<key>`` names that ``resume=true`` may change for ``algo`` (``algos.registry``)."""
+    """``algo_options`` keys that ``resume=true`` may change for ``algo`` (``algos.registry``)."""
     from sim2real.algos import registry
 
-    return tuple(f"algo_options.{k}" for k in registry.resumable_options(algo))
+    return registry.resumable_options(algo)
 
 
 def train(cfg: TrainConfig) -> dict:
@@ -224,7 +224,3 @@ def train(cfg: TrainConfig) -> dict:
         logger.close()
     export_policy(algo, state, os.path.join(run.dir, "policy.msgpack"))
     return {"state": state, "metrics": last, "run_dir": run.dir, "algo": algo, "env": env, "finished": end == n_chunks}
-
-
-def dumps(d: dict) -> str:
-    return json.dumps(d, indent=2, sort_keys=True)

@@ -26,7 +26,7 @@ def register(name, builder, resumable_options: tuple[str, ...] = ()):
 
 def resumable_options(name: str) -> tuple[str, ...]:
     """``algo_options`` keys of algorithm ``name`` that ``resume=true`` may change."""
-    _load_optional()
+    _load_all()
     return RESUMABLE_OPTIONS.get(name, ())
 
 
@@ -34,7 +34,7 @@ def build(name: str, env, cfg):
     """The algorithm ``name`` for ``env`` and training config ``cfg`` (an ``OuterLoop``)."""
     from sim2real.algos.base import OuterLoop
 
-    _load_optional()
+    _load_all()
     if name not in BUILDERS:
         raise UnknownNameError(unknown_name_message("algo", name, sorted(BUILDERS)))
     algo = BUILDERS[name](env, cfg)
@@ -44,7 +44,7 @@ def build(name: str, env, cfg):
     return algo
 
 
-def _load_optional():
+def _load_all():
     # every module of this package is imported once: an algorithm in its own module registers
     # itself on import, so adding one is that file (plus its test), not a line here
     import importlib

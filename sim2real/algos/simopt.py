@@ -191,12 +191,9 @@ class SimOpt(OuterLoop):
         REPS update's ``reps_kl``, ``reps_ess``, ``reps_cost_min``, ``reps_cost_mean``."""
         first = i == 0
         if self.real is None:
-            if self.z_target is None:
-                raise config_lib.ConfigError("algo_options.real=target needs algo_options.target={param: value, ...}: "
-                                             "the hidden physics of the target env")
             # a traced count: the first iteration and the later ones share one compiled function
             n = jnp.where(first, self.updates_for(True), self.updates_for(False))
-            st, m = self.iteration(st, jnp.asarray(self.z_target), num_updates=n)
+            st, m = self.iteration(st, jnp.asarray(self.target()), num_updates=n)
         else:
             st, m = self.hardware_iteration(st, self.real, first)
         out = dict(dist_mean=m["mean"], dist_cov=m["cov"], target_return=m["target_return"],
@@ -206,6 +203,13 @@ class SimOpt(OuterLoop):
             out[f"std:{name}"] = jnp.sqrt(m["cov"][j, j])
         out.update({f"reps_{k}": m[f"reps_{k}"][-1] for k in ("kl", "ess", "cost_min", "cost_mean")})
         return st, out
+
+    def target(self) -> np.ndarray:
+        """``z [P]`` of the target env (``algo_options.target``); refused, named, when none was given."""
+        if self.z_target is None:
+            raise config_lib.ConfigError("algo_options.real=target needs algo_options.target={param: value, ...}: "
+                                         "the hidden physics of the target env")
+        return self.z_target
 
     def env_steps_per_update(self) -> int:
         """PPO env steps per seed in a later iteration (the first trains ``init_ppo_updates``; the
@@ -436,17 +440,15 @@ def save_recordings(sim: SimOpt, real: RealData, folder: str, prefix: str = "rea
     return paths
 
 
-
-
 def _build(env, cfg):
     opts = config_lib.from_dict(SimOptConfig, cfg.algo_options, "algo_options.")
     if cfg.updates_per_chunk != 1:
         raise config_lib.ConfigError(f"updates_per_chunk={cfg.updates_per_chunk}: algo=simopt runs one SimOpt "
                                      "iteration per chunk (each one checkpointed); set updates_per_chunk=1")
-    if opts.real == "target" and not opts.target:
-        raise config_lib.ConfigError("algo_options.real=target needs algo_options.target={param: value, ...}: "
-                                     "the hidden physics of the target env")
-    return SimOpt(env, cfg.ppo, cfg.dr, opts)
+    so = SimOpt(env, cfg.ppo, cfg.dr, opts)
+    if so.real is None:
+        so.target()  # (refused here, before the driver makes a run folder)
+    return so
 
 
 register("simopt", _build, resumable_options=("recordings",))

@@ -60,7 +60,6 @@ class Effects:
     the velocity-dependent forces and sensing, each a list of the kind plug-ins that act on it."""
 
     def __init__(self, m: mujoco.MjModel, spec: ParamSpec, cfg: EffectsConfig):
-        self.cfg, self.spec = cfg, spec
         self.nu = m.nu
         # the command path's stages, in their order: (plug-in, its name in the state, static data)
         stages = sorted((k for k in kinds.all_kinds() if k.command_order is not None), key=lambda k: k.command_order)

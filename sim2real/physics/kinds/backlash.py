@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 
 from sim2real.physics.kinds.base import ACTUATOR, Kind, name_of, rows, take
-from sim2real.physics.kinds.gain import is_servo
+from sim2real.physics.kinds.gain import is_servo, nominal_gain
 from sim2real.physics.params import Param
 
 
@@ -48,7 +48,7 @@ class Backlash(Kind):
             "inertia_rows": rows(spec, "backlash_inertia", acts),
             "inertia": (np.full(m.nu, cfg.backlash_inertia) if cfg.backlash_inertia > 0 else np.where(arm > 0, arm, 1e-2)),
             "gain_rows": rows(spec, "actuator_gain", acts),
-            "gain": np.array([m.actuator_gear[a, 0] * m.actuator_gainprm[a, 0] for a in acts]),
+            "gain": np.array([nominal_gain(m, a) for a in acts]),
             "qpos": np.array([m.jnt_qposadr[j] for j in joint], np.int32),
             "servo": np.array([is_servo(m, a) for a in acts], bool),
         }

@@ -15,12 +15,17 @@ def is_servo(m: mujoco.MjModel, a: int) -> bool:
             and m.actuator_biasprm[a, 1] != 0)
 
 
+def nominal_gain(m: mujoco.MjModel, a: int) -> float:
+    """Actuator ``a``'s declared force per unit command: gear x gain (Kp for a position servo)."""
+    return float(m.actuator_gear[a, 0] * m.actuator_gainprm[a, 0])
+
+
 def declare(m: mujoco.MjModel, actuators) -> list[Param]:
     """``gain:<act>``: torque per unit command for motors, Kp for position servos; ``kv:<act>`` for servos."""
     ps = []
     for a in actuators:
         an = name_of(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)
-        g = float(m.actuator_gear[a, 0] * m.actuator_gainprm[a, 0])
+        g = nominal_gain(m, a)
         ps.append(Param(f"gain:{an}", round(g, 6), 0.0, 100.0 * abs(g) + 1.0, "N|Nm per unit",
                         "actuator gain (gear x gain; Kp for position servos)", "actuator_gain", a))
         if is_servo(m, a) and m.actuator_biasprm[a, 2] != 0:
