@@ -28,7 +28,7 @@ test-slow: setup
 
 bench: setup
 	$(PY) -m pip install -q -c constraints-cpu.txt -e ".[bench]"
-	$(PY) benchmarks/throughput.py --tag cpu-2core
+	$(PY) benchmarks/throughput.py tag=cpu-2core
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache

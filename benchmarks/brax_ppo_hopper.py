@@ -9,6 +9,7 @@ JAX 0.11 removed; a one-device shim is installed when it is missing.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import functools
 import json
 import os
@@ -24,10 +25,27 @@ if not hasattr(jax, "device_put_replicated"):  # removed in JAX 0.11; brax 0.14.
 
     jax.device_put_replicated = _device_put_replicated
 
-DEFAULTS = dict(num_timesteps=100_000_000, num_envs=4096, unroll_length=32, num_minibatches=16,
-                num_updates_per_batch=4, learning_rate=3e-4, discounting=0.99, gae_lambda=0.95,
-                reward_scaling=0.1, entropy_cost=0.0, clipping_epsilon=0.2, max_grad_norm=0.5,
-                num_evals=11, hidden=128, seed=0, out=".")
+
+
+@dataclasses.dataclass
+class Settings:
+    """Brax PPO's own arguments (same names), the hidden layer width and the output folder."""
+    num_timesteps: int = 100_000_000
+    num_envs: int = 4096
+    unroll_length: int = 32
+    num_minibatches: int = 16
+    num_updates_per_batch: int = 4
+    learning_rate: float = 3e-4
+    discounting: float = 0.99
+    gae_lambda: float = 0.95
+    reward_scaling: float = 0.1
+    entropy_cost: float = 0.0
+    clipping_epsilon: float = 0.2
+    max_grad_norm: float = 0.5
+    num_evals: int = 11
+    hidden: int = 128
+    seed: int = 0
+    out: str = "."
 
 
 def main(argv):
@@ -35,14 +53,14 @@ def main(argv):
     from brax.training.agents.ppo import networks as ppo_networks
     from brax.training.agents.ppo import train as ppo
 
-    from sim2real.config import script_args
+    from sim2real.common import config as config_lib
 
-    args = script_args(argv, DEFAULTS)
+    args = config_lib.load(Settings, argv)
     env = envs.get_environment("hopper", backend="mjx")
     # env steps per update = batch_size * num_minibatches * unroll_length = num_envs * unroll_length
-    batch_size = args["num_envs"] // args["num_minibatches"]
-    net = functools.partial(ppo_networks.make_ppo_networks, policy_hidden_layer_sizes=(args["hidden"],) * 2,
-                            value_hidden_layer_sizes=(args["hidden"],) * 2)
+    batch_size = args.num_envs // args.num_minibatches
+    net = functools.partial(ppo_networks.make_ppo_networks, policy_hidden_layer_sizes=(args.hidden,) * 2,
+                            value_hidden_layer_sizes=(args.hidden,) * 2)
     rows, t0 = [], time.time()
 
     def progress(step, metrics):
@@ -50,18 +68,18 @@ def main(argv):
                      "eval_return": float(metrics.get("eval/episode_reward", float("nan")))})
         print(json.dumps(rows[-1]), flush=True)
 
-    ppo.train(environment=env, num_timesteps=args["num_timesteps"], episode_length=1000, num_envs=args["num_envs"],
-              unroll_length=args["unroll_length"], batch_size=batch_size, num_minibatches=args["num_minibatches"],
-              num_updates_per_batch=args["num_updates_per_batch"], learning_rate=args["learning_rate"],
-              discounting=args["discounting"], gae_lambda=args["gae_lambda"], reward_scaling=args["reward_scaling"],
-              entropy_cost=args["entropy_cost"], clipping_epsilon=args["clipping_epsilon"],
-              max_grad_norm=args["max_grad_norm"], normalize_observations=True,
-              num_evals=args["num_evals"], network_factory=net, seed=args["seed"], progress_fn=progress)
+    ppo.train(environment=env, num_timesteps=args.num_timesteps, episode_length=1000, num_envs=args.num_envs,
+              unroll_length=args.unroll_length, batch_size=batch_size, num_minibatches=args.num_minibatches,
+              num_updates_per_batch=args.num_updates_per_batch, learning_rate=args.learning_rate,
+              discounting=args.discounting, gae_lambda=args.gae_lambda, reward_scaling=args.reward_scaling,
+              entropy_cost=args.entropy_cost, clipping_epsilon=args.clipping_epsilon,
+              max_grad_norm=args.max_grad_norm, normalize_observations=True,
+              num_evals=args.num_evals, network_factory=net, seed=args.seed, progress_fn=progress)
     total = time.time() - t0
-    os.makedirs(args["out"], exist_ok=True)
-    with open(os.path.join(args["out"], "brax_ppo_hopper.csv"), "w", newline="") as f:
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, "brax_ppo_hopper.csv"), "w", newline="") as f:
         f.write(f"# brax {__import__('brax').__version__} PPO, hopper (mjx), device {jax.devices()[0].device_kind}, "
-                f"args {json.dumps(args)}\n")
+                f"args {json.dumps(dataclasses.asdict(args))}\n")
         w = csv.DictWriter(f, fieldnames=["env_steps", "wall_seconds", "eval_return"])
         w.writeheader()
         w.writerows(rows)

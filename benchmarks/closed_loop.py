@@ -1,7 +1,7 @@
 """Does the loop pay? Policies for a "real" plant with two concealed effects, from one budget of
 3 recorded episodes of the nominal policy, scored on that plant.
 
-    python benchmarks/closed_loop.py --env pendulum --seeds 3 --out benchmarks/results/closed_loop
+    python benchmarks/closed_loop.py env=pendulum seeds=3 out=benchmarks/results/closed_loop
 
 The real plant is an MJCF stepped by native MuJoCo (``benchmarks/plants/<env>_real.xml``): its
 effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim2real's. Methods
@@ -13,25 +13,27 @@ effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim
   Coulomb friction, delay, damping), without knowing which effect is there;
 - ``simopt``: SimOpt from the same 3 recordings (``real=recordings``, one iteration: REPS on the
   recordings, then retraining), adapting Coulomb friction and delay from the nominal physics;
-- ``diag_dr_1``: the loop, once (``sim2real/loop.py``: record 3 episodes of the nominal policy,
+- ``diag_dr_1``: the loop, once (``sim2real/tools/loop.py``: record 3 episodes of the nominal policy,
   diagnose, retrain with ``dr.from_diagnosis``);
 - ``diag_dr_2``: the loop twice (record again with the new policy, diagnose again, retrain).
 
 Every policy runs 64 episodes on the real plant (the same initial states for all). Writes
 ``<out>/<env>/results.csv`` (method, seed, return), ``summary.md`` and ``closed_loop.png``, and
-the diagnoses' answers (``diagnoses.json``). Runs go to ``--work`` (not kept).
+the diagnoses' answers (``diagnoses.json``). Runs go to ``work`` (not kept).
 """
 from __future__ import annotations
 
-import argparse
 import csv
 import dataclasses
 import json
 import os
 import shutil
+import sys
 import time
 
 import numpy as np
+
+from sim2real.common.cli import settings
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -51,35 +53,41 @@ SETUPS = {
 
 
 def _train(base, name, work, **changes):
-    from sim2real.train import train
+    from sim2real.training.driver import train
 
     cfg = dataclasses.replace(base, name=name, out_dir=work, progress=False, tensorboard=False, **changes)
     return train(cfg)["run_dir"]
 
 
 def _scores(run, plant, episodes, seeds, seed=12345, run_seeds=None):
-    from sim2real.record import from_run
+    from sim2real.tools.record import from_run
 
     return [float(np.mean(from_run(run, plant, episodes, seed=seed, run_seed=s, noise=1e-3)[0].ret))
             for s in (run_seeds if run_seeds is not None else range(seeds))]
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--env", default="pendulum", choices=sorted(SETUPS))
-    ap.add_argument("--seeds", type=int, default=3)
-    ap.add_argument("--episodes", type=int, default=64, help="evaluation episodes per policy on the real plant")
-    ap.add_argument("--out", default=os.path.join(HERE, "results", "closed_loop"))
-    ap.add_argument("--work", default="/tmp/closed_loop_runs")
-    ap.add_argument("--total-steps", type=int, default=4_000_000,
-                    help="env steps per seed for every training (the config's 1.5M leaves the oracle under-trained)")
-    ap.add_argument("--methods", default="nominal,oracle,udr_wide,simopt,diag_dr_1,diag_dr_2")
-    args = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """env: the task (a key of SETUPS); seeds: training seeds; episodes: evaluation episodes per policy
+    on the real plant; out: results folder; work: run folders; total_steps: env steps per seed for
+    every training (the config's 1.5M leaves the oracle under-trained); methods: comma-separated."""
+    env: str = "pendulum"
+    seeds: int = 3
+    episodes: int = 64
+    out: str = os.path.join(HERE, "results", "closed_loop")
+    work: str = "/tmp/closed_loop_runs"
+    total_steps: int = 4_000_000
+    methods: str = "nominal,oracle,udr_wide,simopt,diag_dr_1,diag_dr_2"
 
-    from sim2real import config as config_lib
-    from sim2real import loop
+
+def main(args: Settings):
+    if args.env not in SETUPS:
+        raise SystemExit(f"env={args.env}: one of {', '.join(sorted(SETUPS))}")
+
     from sim2real.algos.base import DRConfig
-    from sim2real.train import TrainConfig, train
+    from sim2real.common import config as config_lib
+    from sim2real.tools import loop
+    from sim2real.training.driver import TrainConfig, train
 
     setup = SETUPS[args.env]
     plant = os.path.join(ROOT, setup["plant"])
@@ -115,7 +123,7 @@ def main():
     # the one real budget: 3 episodes of each seed's nominal policy; SimOpt compares at the env's
     # control step, so it reads the same recordings every frame_skip-th row
     from sim2real.envs.registry import env_class
-    from sim2real.record import from_run, save
+    from sim2real.tools.record import from_run, save
 
     frame_skip = base.env_options.get("frame_skip", env_class(base.env).default_config.frame_skip)
     ctrl_rate = {}
@@ -203,4 +211,4 @@ def write(args, setup, rows, diagnoses, seconds):
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))

@@ -7,18 +7,18 @@ the *nominal* MJCF and those recordings. Writes a CSV of the cases, the confusio
 (markdown and PNG) and prints the accuracy.
 
     python benchmarks/concealed_effects.py                      # all cases (~15 min on 2 cores)
-    python benchmarks/concealed_effects.py --only pendulum      # cases whose label contains it
+    python benchmarks/concealed_effects.py only=pendulum      # cases whose label contains it
 """
 from __future__ import annotations
 
-import argparse
-import dataclasses
 import csv
+import dataclasses
 import os
+import sys
 import tempfile
 import time
 
-
+from sim2real.common.cli import settings
 from sim2real.envs.base import ASSETS
 from sim2real.sysid.generator import SYSTEMS, Case, record
 
@@ -136,14 +136,16 @@ def confusion(rows: list[dict]) -> tuple[list[str], list[list[int]]]:
     return labels, mat
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--only", default="", help="run the cases whose label contains this text")
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "results", "concealed_effects"))
-    args = ap.parse_args()
-    from rich.progress import Progress
+@dataclasses.dataclass
+class Settings:
+    """only: run the cases whose label contains this text; out: results folder."""
+    only: str = ""
+    out: str = os.path.join(os.path.dirname(__file__), "results", "concealed_effects")
 
+
+def main(args: Settings):
     import jax
+    from rich.progress import Progress
 
     # every case builds its own System (new traces); the persistent cache skips re-compiling them
     jax.config.update("jax_compilation_cache_dir", os.path.join(tempfile.gettempdir(), "sim2real_jax_cache"))
@@ -206,4 +208,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))

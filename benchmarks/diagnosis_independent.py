@@ -1,9 +1,9 @@
 """Independent benchmark of the diagnosis: cases from ``sysid_cases.py`` (native MuJoCo truth,
 effects implemented there, fresh MJCF), a tuning half and a frozen test half.
 
-    python benchmarks/diagnosis_independent.py --split tuning          # what thresholds may look at
-    python benchmarks/diagnosis_independent.py --split test            # the headline (each run is logged)
-    python benchmarks/diagnosis_independent.py --split tuning --only arm2 --jobs 2
+    python benchmarks/diagnosis_independent.py split=tuning          # what thresholds may look at
+    python benchmarks/diagnosis_independent.py split=test            # the headline (each run is logged)
+    python benchmarks/diagnosis_independent.py split=tuning only=arm2 jobs=2
 
 Per case: 2 training recordings and 1 held-out recording; the diagnosis runs on its defaults with
 the nominal MJCF. Writes ``<out>/<split>/cases.csv`` (one row per case), ``summary.md`` (the
@@ -17,7 +17,6 @@ a parameter-only case when it selects no effect. Parameters are compared with th
 """
 from __future__ import annotations
 
-import argparse
 import csv
 import dataclasses
 import json
@@ -25,8 +24,11 @@ import os
 import sys
 import time
 import traceback
+from typing import Any, Literal
 
 import numpy as np
+
+from sim2real.common.cli import settings
 
 import sysid_cases
 
@@ -156,28 +158,31 @@ def summarise(rows: list[dict], title: str) -> str:
     return "\n".join(L)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--split", choices=("tuning", "test", "all"), default="tuning")
-    ap.add_argument("--only", default="", help="cases whose label contains this text")
-    ap.add_argument("--work", default=os.path.join("runs", "sysid_cases"), help="where generated cases are kept")
-    ap.add_argument("--out", default=OUT)
-    ap.add_argument("--tag", default="", help="suffix of the results folder")
-    ap.add_argument("--jobs", type=int, default=1)
-    ap.add_argument("--note", default="", help="a line for the test-split log (why this look)")
-    ap.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
-                    help="diagnosis settings other than the defaults (tuning runs only)")
-    args = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """split: which cases; only: cases whose label contains this text; work: where generated cases are
+    kept; out: results root; tag: suffix of the results folder; jobs: processes; note: a line for the
+    test-split log (why this look); diagnose: diagnosis settings other than the defaults
+    (``diagnose.min_gain=0.01``; tuning runs only)."""
+    split: Literal["tuning", "test", "all"] = "tuning"
+    only: str = ""
+    work: str = os.path.join("runs", "sysid_cases")
+    out: str = OUT
+    tag: str = ""
+    jobs: int = 1
+    note: str = ""
+    diagnose: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+
+def main(args: Settings):
     cases = [c for c in sysid_cases.build_cases()
              if (args.split == "all" or c.split == args.split) and args.only in c.label]
     print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(sysid_cases.build_cases())})", flush=True)
     os.makedirs(args.work, exist_ok=True)
     out = os.path.join(args.out, args.split + args.tag)
     os.makedirs(out, exist_ok=True)
-    import yaml
-
-    settings = {k: yaml.safe_load(v) for k, v in (a.split("=", 1) for a in args.set)}
-    if settings and args.split == "test":
+    options = dict(args.diagnose)
+    if options and args.split == "test":
         raise SystemExit("the test split is run with the defaults only")
     rows = []
     t_start = time.time()
@@ -185,13 +190,13 @@ def main():
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(args.jobs) as ex:
-            futs = [ex.submit(run_case, c, args.work, settings) for c in cases]
+            futs = [ex.submit(run_case, c, args.work, options) for c in cases]
             for f in futs:
                 rows.append(f.result())
                 _print(rows[-1])
     else:
         for c in cases:
-            rows.append(run_case(c, args.work, settings))
+            rows.append(run_case(c, args.work, options))
             _print(rows[-1])
     keys = list(dict.fromkeys(k for r in rows for k in r))
     with open(os.path.join(out, "cases.csv"), "w", newline="") as f:
@@ -226,4 +231,4 @@ def _commit() -> str:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(settings(Settings, sys.argv[1:])))

@@ -1,6 +1,6 @@
 """How the selection thresholds were chosen: replay decision rules over permissive runs.
 
-    python benchmarks/diagnosis_independent.py --split tuning --work CASES --set min_gain=0.01 min_t=1.0
+    python benchmarks/diagnosis_independent.py split=tuning work=CASES diagnose.min_gain=0.01 diagnose.min_t=1.0
     python scripts/diagnose.py out=EMPS_PERMISSIVE min_gain=0.01 min_t=0   # the bundled EMPS data
     python benchmarks/diagnosis_replay.py CASES EMPS_PERMISSIVE ["(gain, t, level, stats, strong)"]
 

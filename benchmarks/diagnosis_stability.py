@@ -2,15 +2,18 @@
 settings (smoothing window, prediction horizon) and see whether the named effects change.
 
     python benchmarks/diagnosis_stability.py                      # EMPS + 5 tuning-half cases
-    python benchmarks/diagnosis_stability.py --cases EMPS 040_belt_stage_coulomb_friction@belt
+    python benchmarks/diagnosis_stability.py cases=[EMPS,040_belt_stage_coulomb_friction@belt]
 
 Only tuning-half cases (even seeds) are accepted: the test half stays frozen.
 """
 from __future__ import annotations
 
-import argparse
+import dataclasses
 import json
 import os
+import sys
+
+from sim2real.common.cli import settings
 
 import sysid_cases
 
@@ -55,12 +58,15 @@ def run(label: str, work: str) -> list[dict]:
     return rows
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--cases", nargs="*", default=list(DEFAULT_CASES))
-    ap.add_argument("--work", default=os.path.join("runs", "sysid_cases"))
-    ap.add_argument("--out", default=OUT)
-    args = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """cases: case labels (``[a,b]``); work: where generated cases are kept; out: results folder."""
+    cases: tuple[str, ...] = DEFAULT_CASES
+    work: str = os.path.join("runs", "sysid_cases")
+    out: str = OUT
+
+
+def main(args: Settings):
     rows = [r for label in args.cases for r in run(label, args.work)]
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "results.json"), "w") as f:
@@ -80,4 +86,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))

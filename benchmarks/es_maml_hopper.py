@@ -2,20 +2,20 @@
 (LSTM), trained on torso mass U[1, 9] x friction U[1.5, 2.5], tested on mass [0.5, 11.5] x
 friction [0.1, 2.9].
 
-    python benchmarks/es_maml_hopper.py --part train     # GPU: baselines, ES-MAML, test grid
-    (--part baselines, then --part esmaml: the same in two calls; the second starts from the
+    python benchmarks/es_maml_hopper.py part=train     # GPU: baselines, ES-MAML, test grid
+    (part=baselines, then part=esmaml: the same in two calls; the second starts from the
      uniform-DR policy the first kept in the results folder)
-    python benchmarks/es_maml_hopper.py --part speed     # meta-iterations/s on this machine
-    python benchmarks/es_maml_hopper.py --part plots     # heat maps + table from the saved grid
-    python benchmarks/es_maml_hopper.py --part merge --merge-from DIR   # add DIR's seeds (run with
-                                                         # --seed/--seeds --out DIR), then table + plots
-    ... --scale 0.01 --out /tmp/x                        # tiny budgets, to check the script on CPU
+    python benchmarks/es_maml_hopper.py part=speed     # meta-iterations/s on this machine
+    python benchmarks/es_maml_hopper.py part=plots     # heat maps + table from the saved grid
+    python benchmarks/es_maml_hopper.py part=merge merge_from=DIR   # add DIR's seeds (run with
+                                                         # seed=/seeds= out=DIR), then table + plots
+    ... scale=0.01 out=/tmp/x                        # tiny budgets, to check the script on CPU
 
-Scaled down from seed 004 (device budget): the baselines train ``--steps`` env steps; ES-MAML is
+Scaled down from seed 004 (device budget): the baselines train ``steps`` env steps; ES-MAML is
 warm-started from each seed's uniform-DR MLP policy (meta-training from scratch with ES needs far
-more than the budget) and runs ``--meta-iters`` meta-iterations with population ``--population``,
+more than the budget) and runs ``meta_iters`` meta-iterations with population ``population``,
 each member adapting with 3 PPO updates x 4096 env steps (seed 004's inner loop) and scored on
-``--eval-horizon``-step episodes. Test episodes are full length (1000 steps). ES-MAML and the
+``eval_horizon``-step episodes. Test episodes are full length (1000 steps). ES-MAML and the
 "udr_mlp+adapt" row are evaluated after the same 3-update adaptation on each test cell.
 
 Writes benchmarks/results/es_maml_hopper/: grid.npz (returns [method, seed, mass, friction]),
@@ -23,14 +23,17 @@ table.csv (in/out-of-distribution means), meta.csv (per meta-iteration), speed.c
 """
 from __future__ import annotations
 
-import argparse
 import csv
+import dataclasses
 import json
 import os
+import sys
 import time
+from typing import Literal
 
 import numpy as np
 
+from sim2real.common.cli import settings
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "es_maml_hopper")
@@ -50,8 +53,8 @@ def dr_args(box):
 
 
 def train_baseline(label, extra, args):
-    from sim2real import config as config_lib
-    from sim2real.train import TrainConfig, train
+    from sim2real.common import config as config_lib
+    from sim2real.training.driver import TrainConfig, train
 
     cfg = config_lib.load(TrainConfig, BASE + [f"name={label}", f"out_dir={args.work}", "overwrite=true",
                                                f"seed={args.seed}", f"num_seeds={args.seeds}", f"total_steps={int(args.steps * args.scale)}",
@@ -78,7 +81,7 @@ def make_esmaml(env, ppo_cfg, args):
 
 
 def grid_z(env):
-    from sim2real.evaluate import grid
+    from sim2real.tools.evaluate import grid
 
     zs, _ = grid(env, {"mass:torso": MASSES, "friction": FRICTIONS})
     return zs  # [12 * 8, P], mass-major
@@ -88,7 +91,7 @@ def eval_grid(env, ppo, params, stats, key, episodes_per_cell):
     """Returns ``[S, 12, 8]`` mean full-episode returns (no adaptation)."""
     import jax
 
-    from sim2real.evaluate import episodes
+    from sim2real.rl.episodes import episodes
 
     zs = grid_z(env)
     f = jax.jit(jax.vmap(lambda p, s, k: episodes(env, ppo, p, s, zs, k, episodes_per_cell)["return"].mean(-1)))
@@ -100,7 +103,7 @@ def eval_grid_adapted(es, params, stats, key, episodes_per_cell):
     """Few-shot: 3 PPO updates on each test cell, then full-length episodes; ``[S, 12, 8]``."""
     import jax
 
-    from sim2real.evaluate import episodes
+    from sim2real.rl.episodes import episodes
 
     env = es.env
     zs = grid_z(env)
@@ -119,7 +122,7 @@ def eval_grid_adapted(es, params, stats, key, episodes_per_cell):
 def part_train(args):
     import jax
 
-    from sim2real import checkpoint
+    from sim2real.training import checkpoint
 
     os.makedirs(args.out, exist_ok=True)
     results = {}
@@ -158,13 +161,13 @@ def part_train(args):
             return
 
     # ES-MAML, warm-started from the uniform-DR MLP of each seed
-    from sim2real.runs import load_policy
+    from sim2real.training.runs import load_policy
 
     cfg, env, _, params, stats = load_policy(os.path.join(args.out, "udr_mlp_run"))
     es = make_esmaml(env, cfg.ppo, args)
     n = jax.tree_util.tree_leaves(params)[0].shape[0]
     if n != args.seeds:
-        raise ValueError(f"the saved uniform-DR policy has {n} seeds; pass --seeds {n}")
+        raise ValueError(f"the saved uniform-DR policy has {n} seeds; pass seeds={n}")
     if not (args.resume and "udr_mlp+adapt" in results):  # a resumed run keeps what it evaluated
         t0 = time.time()
         results["udr_mlp+adapt"] = eval_grid_adapted(es, params, stats, key, E)
@@ -224,9 +227,9 @@ def part_speed(args):
     """meta-iterations/s of one jitted meta step (1 seed) at the given population."""
     import jax
 
-    from sim2real import config as config_lib
+    from sim2real.common import config as config_lib
     from sim2real.envs import make
-    from sim2real.train import TrainConfig
+    from sim2real.training.driver import TrainConfig
 
     cfg = config_lib.load(TrainConfig, BASE)
     env = make("hopper")
@@ -331,28 +334,34 @@ def plots(out):
     print(f"plots in {out}")
 
 
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--part", choices=["train", "baselines", "esmaml", "speed", "plots", "merge"], default="train")
-    ap.add_argument("--merge-from", nargs="*", default=[],
-                    help="--part merge: results folders of other seeds (same methods) to stack onto --out")
-    ap.add_argument("--seeds", type=int, default=3)
-    ap.add_argument("--seed", type=int, default=0, help="base seed: seeds are split from it (baselines and ES init)")
-    ap.add_argument("--steps", type=float, default=20e6)
-    ap.add_argument("--scale", type=float, default=1.0)
-    ap.add_argument("--meta-iters", type=int, default=100)
-    ap.add_argument("--chunk", type=int, default=10)
-    ap.add_argument("--population", type=int, default=32)
-    ap.add_argument("--sigma", type=float, default=0.02)
-    ap.add_argument("--meta-lr", type=float, default=0.002)
-    ap.add_argument("--eval-horizon", type=int, default=300)
-    ap.add_argument("--episodes", type=int, default=2)
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--tag", default="")
-    ap.add_argument("--resume", action="store_true")
-    ap.add_argument("--out", default=OUT)
-    ap.add_argument("--work", default="/tmp/es_maml_hopper_runs")
-    args = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """part: what to run; merge_from: (part=merge) results folders of other seeds (same methods) to
+    stack onto out; seeds; seed: base seed (seeds are split from it: baselines and ES init); steps:
+    env steps per baseline seed; scale: multiplies every budget; meta_iters, chunk, population,
+    sigma, meta_lr: ES-MAML's; eval_horizon, episodes, repeats: the evaluation's; tag; resume;
+    out: results folder; work: run folders."""
+    part: Literal["train", "baselines", "esmaml", "speed", "plots", "merge"] = "train"
+    merge_from: tuple[str, ...] = ()
+    seeds: int = 3
+    seed: int = 0
+    steps: float = 20e6
+    scale: float = 1.0
+    meta_iters: int = 100
+    chunk: int = 10
+    population: int = 32
+    sigma: float = 0.02
+    meta_lr: float = 0.002
+    eval_horizon: int = 300
+    episodes: int = 2
+    repeats: int = 3
+    tag: str = ""
+    resume: bool = False
+    out: str = OUT
+    work: str = "/tmp/es_maml_hopper_runs"
+
+
+def main(args: Settings):
     if args.part in ("train", "baselines", "esmaml"):
         part_train(args)
     elif args.part == "speed":
@@ -365,4 +374,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))

@@ -14,6 +14,7 @@ excluded; the time to compile is reported separately).
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import os
 import sys
@@ -22,25 +23,32 @@ import time
 import jax
 import numpy as np
 
-from sim2real import config as config_lib
-from sim2real.evaluate import episodes
-from sim2real.train import TrainConfig, train
+from sim2real.common import config as config_lib
+from sim2real.rl.episodes import episodes
+from sim2real.training.driver import TrainConfig, train
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def load_args(argv, own: dict):
-    """``key=value`` arguments -> ``(own, cfg)``: the script's ``own`` keys (converted to the
-    type of their default) and the ``TrainConfig`` from the rest (``config=`` default:
-    ``configs/hopper.yaml``)."""
-    own, rest = config_lib.split_args(argv, own)
+@dataclasses.dataclass
+class Settings:
+    """target: the return whose first crossing is timed; eval_episodes: nominal episodes per seed."""
+    target: float = 2500.0
+    eval_episodes: int = 128
+
+
+def load_args(argv, settings):
+    """``key=value`` arguments -> ``(own, cfg)``: the script's own ``settings`` (a dataclass, its
+    fields' keys) and the ``TrainConfig`` from the rest (``config=`` default: ``configs/hopper.yaml``)."""
+    mine, rest = config_lib.split(argv, settings)
     config = next((a for a in rest if a.startswith("config=")), f"config={os.path.join(HERE, '..', 'configs', 'hopper.yaml')}")
-    return own, config_lib.load(TrainConfig, [config, *(a for a in rest if not a.startswith("config="))])
+    return (config_lib.load(settings, mine),
+            config_lib.load(TrainConfig, [config, *(a for a in rest if not a.startswith("config="))]))
 
 
 def main(argv):
-    own, cfg = load_args(argv, {"target": 2500.0, "eval_episodes": 128})
-    target, n_eval = own["target"], own["eval_episodes"]
+    own, cfg = load_args(argv, Settings)
+    target, n_eval = own.target, own.eval_episodes
     t0 = time.time()
     out = train(cfg)
     wall = time.time() - t0

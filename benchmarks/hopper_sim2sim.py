@@ -1,12 +1,13 @@
 """Run the GPU-trained hopper policy in Gymnasium's Hopper-v5 (native MuJoCo, RK4, 2 ms x 4, default
 solver, every geom colliding) and in our MJX hopper, on the CPU: does the tuned simulator transfer?
 
-    python benchmarks/hopper_sim2sim.py [run_dir] [episodes]
+    python benchmarks/hopper_sim2sim.py run=RUN_DIR episodes=20
 
 Writes ``<run_dir>/sim2sim.json``.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import sys
@@ -14,9 +15,10 @@ import sys
 import jax
 import numpy as np
 
-from sim2real.evaluate import episodes
+from sim2real.common.cli import settings
 from sim2real.rl import normalize
-from sim2real.runs import load_policy
+from sim2real.rl.episodes import episodes
+from sim2real.training.runs import load_policy
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -40,9 +42,15 @@ def gym_returns(algo, params, stats, n, seed=0):
     return np.array(rets), np.array(lens)
 
 
-def main(argv):
-    run = argv[0] if argv else os.path.join(HERE, "results", "hopper_ppo_gpu")
-    n = int(argv[1]) if len(argv) > 1 else 20
+@dataclasses.dataclass
+class Settings:
+    """run: the trained hopper run folder; episodes: episodes in each simulator."""
+    run: str = os.path.join(HERE, "results", "hopper_ppo_gpu")
+    episodes: int = 20
+
+
+def main(args: Settings):
+    run, n = args.run, args.episodes
     cfg, env, algo, params, stats = load_policy(run)
     params, stats = jax.tree_util.tree_map(lambda x: x[0], (params, stats))
     g_ret, g_len = gym_returns(algo, params, stats, n)
@@ -57,4 +65,4 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    main(settings(Settings, sys.argv[1:]))

@@ -1,32 +1,34 @@
 """LSDR on hopper (seed 000), scaled to the device budget: learned ranges, evolution heat maps,
 the Gaussian run, learned vs fixed DR at test time, EPOpt with learned vs uniform DR.
 
-    python benchmarks/lsdr_hopper.py --part ranges     # Table I + Fig. 4: one run per parameter
-    python benchmarks/lsdr_hopper.py --part gaussian   # Fig. 1d / 6: 4-D full-covariance Gaussian
-    python benchmarks/lsdr_hopper.py --part transfer   # Fig. 8: LSDR vs fixed DR, fine-tuned on the test range
-    python benchmarks/lsdr_hopper.py --part epopt      # Fig. 9: EPOpt-PPO with learned vs uniform DR
-    python benchmarks/lsdr_hopper.py --part plots      # figures from the saved results (CPU)
-    python benchmarks/lsdr_hopper.py --part table      # learned-range table from the saved results (CPU)
-    ... --scale 0.02                                   # tiny budgets, to check the script on CPU
+    python benchmarks/lsdr_hopper.py part=ranges     # Table I + Fig. 4: one run per parameter
+    python benchmarks/lsdr_hopper.py part=gaussian   # Fig. 1d / 6: 4-D full-covariance Gaussian
+    python benchmarks/lsdr_hopper.py part=transfer   # Fig. 8: LSDR vs fixed DR, fine-tuned on the test range
+    python benchmarks/lsdr_hopper.py part=epopt      # Fig. 9: EPOpt-PPO with learned vs uniform DR
+    python benchmarks/lsdr_hopper.py part=plots      # figures from the saved results (CPU)
+    python benchmarks/lsdr_hopper.py part=table      # learned-range table from the saved results (CPU)
+    ... scale=0.02                                   # tiny budgets, to check the script on CPU
 
-Each part writes ``benchmarks/results/lsdr_hopper/<part>.npz`` / ``.csv`` (and ``--part plots``
-the PNGs). Every run trains ``--seeds`` seeds in one ``jit(vmap(scan))`` through the same
+Each part writes ``benchmarks/results/lsdr_hopper/<part>.npz`` / ``.csv`` (and ``part=plots``
+the PNGs). Every run trains ``seeds`` seeds in one ``jit(vmap(scan))`` through the same
 algorithm objects as ``scripts/train.py``. Priors are the paper's Table I boxes; values below a
 parameter's physical lower bound (negative sizes, friction, damping) are clipped to it in the
-simulator (README, bounds rule); with ``--out-of-bounds terminate`` such a context is a robot that
+simulator (README, bounds rule); with ``out_of_bounds=terminate`` such a context is a robot that
 cannot exist instead: its episodes end at the first step with reward 0.
 """
 from __future__ import annotations
 
-import argparse
 import csv
+import dataclasses
 import json
 import os
 import sys
 import time
+from typing import Literal
 
 import numpy as np
 
+from sim2real.common.cli import settings
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "lsdr_hopper")
@@ -46,9 +48,9 @@ BASE = [  # GPU scale: 4096 envs x 16 steps per PPO update
 
 
 def config(extra: list[str], steps: float, a):
-    """The run's ``TrainConfig``: ``BASE`` + ``extra`` with ``--scale``, ``--seeds`` and ``--out-of-bounds`` of ``a``."""
-    from sim2real import config as config_lib
-    from sim2real.train import TrainConfig
+    """The run's ``TrainConfig``: ``BASE`` + ``extra`` with ``scale``, ``seeds`` and ``out_of_bounds`` of ``a``."""
+    from sim2real.common import config as config_lib
+    from sim2real.training.driver import TrainConfig
 
     args = BASE + [f"env_options.out_of_bounds={a.out_of_bounds}", f"total_steps={int(steps * a.scale)}",
                    f"num_seeds={a.seeds}"] + extra
@@ -62,7 +64,7 @@ def run(cfg, chunks_between_evals: int = 0, evaluate=None, state=None, log=print
     import jax
 
     from sim2real.envs import make
-    from sim2real.train import build_algo, make_chunk, num_chunks
+    from sim2real.training.driver import build_algo, make_chunk, num_chunks
 
     env = make(cfg.env, **cfg.env_options)
     algo = build_algo(cfg, env)
@@ -105,7 +107,7 @@ def test_evaluator(names, grid, fixed_base_overrides=None, episodes_per=1):
     import jax
     import jax.numpy as jnp
 
-    from sim2real.evaluate import episodes
+    from sim2real.rl.episodes import episodes
 
     cache = {}
 
@@ -141,7 +143,7 @@ def quantile_range(centers, p, q=0.05):
 
 
 def part_table(a, log):
-    """Per parameter, from the saved ``ranges_<name>.npz`` in ``--out``: the moment-matched uniform,
+    """Per parameter, from the saved ``ranges_<name>.npz`` in ``out``: the moment-matched uniform,
     the central 90% range and the probability p_phi puts on values below the physical lower bound
     (robots that cannot exist), mean over seeds; written to ``ranges_table.csv``."""
     from sim2real.envs import make
@@ -220,7 +222,7 @@ def part_gaussian(a, log):
     Both final policies are evaluated on a 10 x 10 grid over the prior box of ``GRID_PAIR`` (the
     other two parameters at the hopper's defaults). The paper samples the Gaussian's score term
     from p_phi ("for the experiments with multivariate Gaussian distributions changing the
-    sampling distribution was not required"): ``--sample-from learned`` is this part's default.
+    sampling distribution was not required"): ``sample_from=learned`` is this part's default.
     """
     names = list(TABLE_I)
     lo = [TABLE_I[n][0][0] for n in names]
@@ -265,7 +267,7 @@ def part_transfer(a, log, optimizer="ppo"):
     evaluate = test_evaluator(["torso_size"], grid)
     tag = "transfer" if optimizer == "ppo" else "epopt"
     path = os.path.join(a.out, f"{tag}.json")
-    # one device call may run one algorithm (--algos): merge into what earlier calls wrote
+    # one device call may run one algorithm (algos): merge into what earlier calls wrote
     result = json.load(open(path)) if os.path.exists(path) else {}
     extra_opt = [] if optimizer == "ppo" else ["algo_options.policy_optimizer=epopt",
                                                f"algo_options.epopt.num_contexts={a.epopt_contexts}"]
@@ -411,33 +413,42 @@ def part_plots(a, log):
         fig.savefig(os.path.join(a.out, f"{tag}.png"), dpi=110)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--part", required=True, choices=["ranges", "gaussian", "transfer", "epopt", "plots", "table"])
-    ap.add_argument("--only", default="", help="ranges: one parameter")
-    ap.add_argument("--steps", type=float, default=30e6, help="env steps per seed per run")
-    ap.add_argument("--ft-steps", dest="ft_steps", type=float, default=10e6)
-    ap.add_argument("--seeds", type=int, default=2)
-    ap.add_argument("--contexts", type=int, default=64, help="K: episodes per distribution update")
-    ap.add_argument("--epopt-contexts", dest="epopt_contexts", type=int, default=1000)
-    ap.add_argument("--dist-every", dest="dist_every", type=int, default=4)
-    ap.add_argument("--dist-start", dest="dist_start", type=int, default=40)
-    ap.add_argument("--chunk", type=int, default=25, help="PPO updates per jitted chunk")
-    ap.add_argument("--eval-every", dest="eval_every", type=int, default=2, help="chunks between test evaluations")
-    ap.add_argument("--scale", type=float, default=1.0)
-    ap.add_argument("--alpha", type=float, default=1.0, help="ranges/gaussian: LSDR's KL(p || p_phi) weight")
-    ap.add_argument("--algos", default="lsdr,fixed_dr", help="gaussian/transfer/epopt: which runs (comma-separated)")
-    ap.add_argument("--sample-from", dest="sample_from", default="learned", choices=["learned", "prior"],
-                    help="gaussian: where the score term's contexts come from (the paper: p_phi)")
-    ap.add_argument("--center", default="ema", choices=["ema", "batch"],
-                    help="gaussian: centre the returns by their running mean (paper) or the batch mean")
-    ap.add_argument("--dist-lr", dest="dist_lr", type=float, default=0.05, help="gaussian: Adam step on phi")
-    ap.add_argument("--out", default=OUT)
-    ap.add_argument("--tag", default="", help="gaussian: suffix of the result files (gaussian<tag>.npz)")
-    ap.add_argument("--out-of-bounds", dest="out_of_bounds", default="clip", choices=["clip", "terminate"],
-                    help="physics outside the parameters' bounds: simulate the bound, or end the episode "
-                         "at once with reward 0 (the paper's simulator: negative sizes/masses fail)")
-    a = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """part (required): what to run. only: (ranges) one parameter; steps: env steps per seed per run;
+    ft_steps: fine-tuning steps; seeds; contexts: K, episodes per distribution update;
+    epopt_contexts; dist_every, dist_start: distribution updates every/after so many PPO updates;
+    chunk: PPO updates per jitted chunk; eval_every: chunks between test evaluations; scale:
+    multiplies every budget; alpha: (ranges/gaussian) LSDR's KL(p || p_phi) weight; algos:
+    (gaussian/transfer/epopt) which runs, comma-separated; sample_from: (gaussian) where the score
+    term's contexts come from (the paper: learned p_phi); center: (gaussian) centre the returns by
+    their running mean (ema, the paper) or the batch mean; dist_lr: (gaussian) Adam step on phi;
+    out: results folder; tag: (gaussian) suffix of the result files; out_of_bounds: physics outside
+    the parameters' bounds: simulate the bound (clip), or end the episode at once with reward 0
+    (terminate; the paper's simulator: negative sizes/masses fail)."""
+    part: Literal["ranges", "gaussian", "transfer", "epopt", "plots", "table"]
+    only: str = ""
+    steps: float = 30e6
+    ft_steps: float = 10e6
+    seeds: int = 2
+    contexts: int = 64
+    epopt_contexts: int = 1000
+    dist_every: int = 4
+    dist_start: int = 40
+    chunk: int = 25
+    eval_every: int = 2
+    scale: float = 1.0
+    alpha: float = 1.0
+    algos: str = "lsdr,fixed_dr"
+    sample_from: Literal["learned", "prior"] = "learned"
+    center: Literal["ema", "batch"] = "ema"
+    dist_lr: float = 0.05
+    out: str = OUT
+    tag: str = ""
+    out_of_bounds: Literal["clip", "terminate"] = "clip"
+
+
+def main(a: Settings):
     os.makedirs(a.out, exist_ok=True)
     import jax
 
@@ -451,4 +462,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))

@@ -1,6 +1,6 @@
 """How the bundled real datasets were converted (run once; the results are in sim2real/sysid/data/).
 
-    python benchmarks/make_real_datasets.py --dfki PATH/torque_limited_simple_pendulum
+    python benchmarks/make_real_datasets.py dfki=PATH/torque_limited_simple_pendulum
 
 DFKI torque-limited simple pendulum (BSD-3-Clause, github.com/dfki-ric-underactuated-lab/
 torque_limited_simple_pendulum, commit ed17ea2d): two swing-ups recorded on the real pendulum
@@ -12,11 +12,14 @@ logger's first interval is 22 ms, the others 5 ms).
 """
 from __future__ import annotations
 
-import argparse
+import dataclasses
 import os
 import subprocess
+import sys
 
 import numpy as np
+
+from sim2real.common.cli import settings
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.path.join(HERE, "..", "sim2real", "sysid", "data")
@@ -46,13 +49,16 @@ def dfki(repo: str) -> None:
         print(name, len(t), "samples", f"{t[-1] - t[0]:.1f} s")
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--dfki", help="git folder of dfki-ric-underactuated-lab/torque_limited_simple_pendulum")
-    args = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """dfki: git folder of dfki-ric-underactuated-lab/torque_limited_simple_pendulum."""
+    dfki: str = ""
+
+
+def main(args: Settings):
     if args.dfki:
         dfki(args.dfki)
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))

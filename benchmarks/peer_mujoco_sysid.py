@@ -12,11 +12,11 @@ the held-out recording's segments from measured states, at the diagnosis' physic
 the joint positions over their spread, mean over joints). Times are wall-clock on this machine.
 
     python benchmarks/peer_mujoco_sysid.py                       # EMPS + 5 independent cases
-    python benchmarks/peer_mujoco_sysid.py --cases 040_belt_stage_coulomb_friction@belt
+    python benchmarks/peer_mujoco_sysid.py cases=[040_belt_stage_coulomb_friction@belt]
 """
 from __future__ import annotations
 
-import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -24,6 +24,8 @@ import time
 
 import mujoco
 import numpy as np
+
+from sim2real.common.cli import settings
 
 import sysid_cases
 
@@ -221,12 +223,15 @@ def run_case(label: str, work: str) -> dict:
     return row
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--cases", nargs="*", default=["EMPS", *DEFAULT_CASES])
-    ap.add_argument("--work", default=os.path.join("runs", "sysid_cases"))
-    ap.add_argument("--out", default=OUT)
-    args = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """cases: case labels (``[a,b]``); work: where generated cases are kept; out: results folder."""
+    cases: tuple[str, ...] = ("EMPS", *DEFAULT_CASES)
+    work: str = os.path.join("runs", "sysid_cases")
+    out: str = OUT
+
+
+def main(args: Settings):
     os.makedirs(args.out, exist_ok=True)
     rows = []
     for label in args.cases:
@@ -250,4 +255,4 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(settings(Settings, sys.argv[1:])))

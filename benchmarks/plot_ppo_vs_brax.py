@@ -1,7 +1,7 @@
 """sim2real's PPO and Brax's PPO on hopper, 5 seeds each, one figure: return against env steps and
 against wall time, and a table of both at the budget every run reached.
 
-    python benchmarks/plot_ppo_vs_brax.py [results_dir]   # default benchmarks/results/ppo_seeds
+    python benchmarks/plot_ppo_vs_brax.py results=DIR   # default benchmarks/results/ppo_seeds
 
 Reads ``hopper_g0995_100M_5seeds_seed1_metrics.csv`` (sim2real: the 5 seeds of one vmapped run;
 per update its training episode return, stochastic policy) and ``brax_5seeds/seed*_g0995.jsonl``
@@ -11,6 +11,7 @@ its deterministic evaluations on 128 envs). Writes ``ppo_vs_brax.png`` and ``ppo
 from __future__ import annotations
 
 import csv
+import dataclasses
 import glob
 import json
 import os
@@ -18,7 +19,15 @@ import sys
 
 import numpy as np
 
+from sim2real.common.cli import settings
+
 HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+@dataclasses.dataclass
+class Settings:
+    """results: the folder holding the runs' files (the figure is written there)."""
+    results: str = os.path.join(HERE, "results", "ppo_seeds")
 
 
 def load(d: str):
@@ -40,12 +49,12 @@ def at(curve: np.ndarray, steps: float) -> float:
     return float(curve[i, 2]) if i < len(curve) else float("nan")
 
 
-def main(argv):
+def main(args: Settings):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    d = argv[0] if argv else os.path.join(HERE, "results", "ppo_seeds")
+    d = args.results
     ours, brax = load(d)
     budget = min(c[-1, 0] for c in brax.values())  # the budget every Brax run reached
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
@@ -85,4 +94,4 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    main(settings(Settings, sys.argv[1:]))

@@ -1,16 +1,17 @@
 """PPO training throughput on the CPU with and without ``ppo.split_envs`` (hopper).
 
-    python benchmarks/ppo_cpu_split.py            # 256 and 1024 envs; ~5 min on 2 cores
+    python benchmarks/ppo_cpu_split.py            # envs=[256,1024]; ~5 min on 2 cores
 
 Env steps per second *including learning* (4 PPO updates per jitted chunk, 16 steps per env per
 update, 4 epochs x 4 minibatches, 64x64 MLP), best of 3 chunks after a compiling one. Each
 setting runs in its own process: the CPU device count is fixed when JAX starts. With
-``split_envs`` each core steps its slice of the envs (``sim2real.parallel``); learning runs on
-the whole batch. Writes ``benchmarks/results/ppo_cpu_split.csv``.
+``split_envs`` each core steps its slice of the envs (``sim2real.envs.parallel``); learning runs on
+the whole batch. Writes ``out=`` (default ``benchmarks/results/ppo_cpu_split.csv``).
 """
 from __future__ import annotations
 
 import csv
+import dataclasses
 import os
 import subprocess
 import sys
@@ -22,12 +23,12 @@ CHILD = """
 import sys, time
 split, n = sys.argv[1] == "1", int(sys.argv[2])
 if split:
-    from sim2real import parallel
+    from sim2real.envs import parallel
     parallel.use_cpu_cores()
 import jax
-from sim2real import config as config_lib
+from sim2real.common import config as config_lib
 from sim2real.envs import make
-from sim2real.train import TrainConfig, build_algo, make_chunk
+from sim2real.training.driver import TrainConfig, build_algo, make_chunk
 cfg = config_lib.load(TrainConfig, ["env=hopper", f"ppo.num_envs={n}", "ppo.num_steps=16", "ppo.num_minibatches=4",
                                     "ppo.num_epochs=4", f"ppo.split_envs={str(split).lower()}", "ppo.net.hidden=[64,64]"])
 algo = build_algo(cfg, make("hopper"))
@@ -56,20 +57,29 @@ def measure(split: bool, n: int) -> tuple[int, float]:
     return int(devices), float(sps)
 
 
-def main():
+@dataclasses.dataclass
+class Settings:
+    """envs: env batch sizes to time; out: the CSV written."""
+    envs: tuple[int, ...] = (256, 1024)
+    out: str = os.path.join(HERE, "results", "ppo_cpu_split.csv")
+
+
+def main(args: Settings):
     rows = []
-    for n in (256, 1024):
+    for n in args.envs:
         for split in (False, True):
             devices, sps = measure(split, n)
             rows.append({"env": "hopper", "num_envs": n, "split_envs": split, "devices": devices,
                          "cores": os.cpu_count(), "env_steps_per_s_incl_learning": round(sps)})
             print(rows[-1], flush=True)
-    os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
-    with open(os.path.join(HERE, "results", "ppo_cpu_split.csv"), "w", newline="") as f:
+    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
+    with open(args.out, "w", newline="") as f:
         w = csv.DictWriter(f, list(rows[0]))
         w.writeheader()
         w.writerows(rows)
 
 
 if __name__ == "__main__":
-    main()
+    from sim2real.common.cli import settings
+
+    main(settings(Settings, sys.argv[1:]))

@@ -21,6 +21,7 @@ rate that training keeps. Prints a table and appends it to ``out=`` (CSV) when g
 from __future__ import annotations
 
 import csv
+import dataclasses
 import os
 import sys
 import time
@@ -31,7 +32,7 @@ import jax.numpy as jnp
 from sim2real.envs import make
 from sim2real.envs.autoreset import step_autoreset
 from sim2real.rl.rollout import collect, to_ctrl
-from sim2real.train import TrainConfig, build_algo, make_chunk
+from sim2real.training.driver import TrainConfig, build_algo, make_chunk
 
 from hopper_ppo import load_args  # (the same key=value + config= handling)
 
@@ -96,16 +97,23 @@ def profile(cfg: TrainConfig, seeds: int) -> dict:
     return row
 
 
+@dataclasses.dataclass
+class Settings:
+    """seeds: comma-separated seed counts, one row each; out: a CSV to append the rows to."""
+    seeds: str = "1,5"
+    out: str = ""
+
+
 def main(argv):
-    own, cfg = load_args(argv, {"seeds": "1,5", "out": ""})
+    own, cfg = load_args(argv, Settings)
     rows = []
-    for s in own["seeds"].split(","):  # each row printed and saved as soon as it is measured
+    for s in own.seeds.split(","):  # each row printed and saved as soon as it is measured
         r = profile(cfg, int(s))
         rows.append(r)
         print(" ".join(f"{k}={v}" for k, v in r.items()), flush=True)
-        if own["out"]:
-            new = not os.path.exists(own["out"])
-            with open(own["out"], "a", newline="") as f:
+        if own.out:
+            new = not os.path.exists(own.out)
+            with open(own.out, "a", newline="") as f:
                 w = csv.DictWriter(f, fieldnames=list(r))
                 if new:
                     w.writeheader()

@@ -6,30 +6,35 @@ state, smooth and score every trajectory against the real ones (Eq. 4), solve th
 refit the Gaussian. The "real" rollouts come from a hopper with hidden parameters. The paper ran
 this on a 64-GPU cluster; the target is <= 10 s on one GPU.
 
-    python benchmarks/reps_update.py --samples 9600 --steps 453 --real 1 --tag gpu-h100
-    python benchmarks/reps_update.py --samples 96 --steps 453 --tag cpu-2core   # CPU reference
+    python benchmarks/reps_update.py samples=9600 steps=453 real=1 tag=gpu-h100
+    python benchmarks/reps_update.py samples=96 steps=453 tag=cpu-2core   # CPU reference
 
 Appends a row to benchmarks/results/reps_update.csv.
 """
 from __future__ import annotations
 
-import argparse
 import csv
+import dataclasses
 import os
+import sys
 import time
 
+from sim2real.common.cli import settings
 
 
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--samples", type=int, default=9600)
-    ap.add_argument("--steps", type=int, default=453)
-    ap.add_argument("--real", type=int, nargs="+", default=[1, 3])
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--tag", default="")
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "results",
-                                                  "reps_update.csv"))
-    args = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """samples: REPS samples; steps: rollout steps per sample; real: numbers of real rollouts
+    (``[1,3]``); repeats: timed calls; tag: the row's label; out: the CSV appended to."""
+    samples: int = 9600
+    steps: int = 453
+    real: tuple[int, ...] = (1, 3)
+    repeats: int = 3
+    tag: str = ""
+    out: str = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "reps_update.csv")
+
+
+def main(args: Settings):
     import jax
     import jax.numpy as jnp
     import numpy as np
@@ -83,4 +88,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))

@@ -9,9 +9,9 @@ offset cannot be seen from one observation, so no single policy trained on a wid
 can compensate it; SimOpt identifies it from closed-loop rollouts.
 
     python benchmarks/simopt_ablation.py             # both targets, SimOpt + baselines, plots (CPU, ~40 min)
-    python benchmarks/simopt_ablation.py --plots     # figures from the saved CSV/NPZ
-    python benchmarks/simopt_ablation.py --scale 0.05 --out /tmp/x   # a quick check of the script
-    python benchmarks/simopt_ablation.py --task hopper  # hopper: torso mass and friction (GPU)
+    python benchmarks/simopt_ablation.py plots=true     # figures from the saved CSV/NPZ
+    python benchmarks/simopt_ablation.py scale=0.05 out=/tmp/x   # a quick check of the script
+    python benchmarks/simopt_ablation.py task=hopper  # hopper: torso mass and friction (GPU)
 
 Writes benchmarks/results/simopt_ablation/: ``<target>_iterations.csv`` (mean/std/returns per
 iteration and seed), ``<target>_distribution.npz``, ``baselines.csv``, ``summary.json`` and the
@@ -19,13 +19,16 @@ plots ``mu_sigma.png``, ``covariance.png``, ``target_return.png``.
 """
 from __future__ import annotations
 
-import argparse
 import csv
+import dataclasses
 import json
 import os
+import sys
 import time
 
 import numpy as np
+
+from sim2real.common.cli import settings
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 EVAL_EPISODES = 64
@@ -46,8 +49,8 @@ TASKS = {
 
 
 def simopt_config(name, target, args):
-    from sim2real import config as config_lib
-    from sim2real.train import TrainConfig
+    from sim2real.common import config as config_lib
+    from sim2real.training.driver import TrainConfig
 
     tgt = "{" + ", ".join(f"'{k}': {v}" for k, v in target.items()) + "}"
     cfg = config_lib.load(TrainConfig, [
@@ -64,7 +67,7 @@ def run_simopt(name, target, args):
     ``<name>_iterations.csv`` (one row per iteration and seed) and ``<name>_distribution.npz``
     (``mean [I, S, D]``, ``cov [I, S, D, D]``: the distribution each iteration trained on; ``final_*``:
     after the last update)."""
-    from sim2real.train import train
+    from sim2real.training.driver import train
 
     cfg = simopt_config(name, target, args)
     t0 = time.time()
@@ -86,10 +89,9 @@ def run_simopt(name, target, args):
 
 def train_baseline(label, dr_args, args, so_cfg):
     """PPO with the same network and the same number of updates as a whole SimOpt run."""
-    from sim2real import config as config_lib
-    from sim2real.train import TrainConfig, train
-
     from sim2real.algos.simopt import SimOptConfig
+    from sim2real.common import config as config_lib
+    from sim2real.training.driver import TrainConfig, train
 
     s = config_lib.from_dict(SimOptConfig, so_cfg.algo_options)
     updates = (s.init_ppo_updates or s.ppo_updates) + s.iterations * s.ppo_updates
@@ -110,7 +112,7 @@ def train_baseline(label, dr_args, args, so_cfg):
 def evaluate_on(out, target, seeds):
     import jax
 
-    from sim2real.evaluate import episodes
+    from sim2real.rl.episodes import episodes
 
     env, algo, state = out["env"], out["algo"], out["state"]
     z = np.tile(env.z_of(**target), (EVAL_EPISODES, 1))
@@ -119,20 +121,28 @@ def evaluate_on(out, target, seeds):
     return np.asarray(f(params, stats, jax.random.split(jax.random.PRNGKey(7), seeds)))
 
 
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--seeds", type=int, default=2)
-    ap.add_argument("--scale", type=float, default=1.0)
-    ap.add_argument("--task", default="pendulum", choices=sorted(TASKS))
-    ap.add_argument("--out", default="", help="default: benchmarks/results/<the task's folder>")
-    ap.add_argument("--work", default="/tmp/simopt_ablation_runs")
-    ap.add_argument("--plots", action="store_true")
-    ap.add_argument("--ppo-updates", type=int, default=100, help="PPO updates per SimOpt iteration")
-    ap.add_argument("--targets", default="", help="comma-separated target names (default: all of the task's)")
-    ap.add_argument("--skip-simopt", dest="skip_simopt", action="store_true",
-                    help="train baselines only; the targets' SimOpt CSVs must already be in --out")
-    ap.add_argument("--baselines", default="nominal,wide_udr,oracle", help="which baselines to (re)train")
-    args = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """seeds; scale: multiplies every budget; task: a key of TASKS; out: results folder (default:
+    benchmarks/results/<the task's folder>); work: run folders; plots: figures from the saved CSV/NPZ
+    only; ppo_updates: PPO updates per SimOpt iteration; targets: comma-separated target names
+    (default: all of the task's); skip_simopt: train baselines only (the targets' SimOpt CSVs must
+    already be in out); baselines: which baselines to (re)train, comma-separated."""
+    seeds: int = 2
+    scale: float = 1.0
+    task: str = "pendulum"
+    out: str = ""
+    work: str = "/tmp/simopt_ablation_runs"
+    plots: bool = False
+    ppo_updates: int = 100
+    targets: str = ""
+    skip_simopt: bool = False
+    baselines: str = "nominal,wide_udr,oracle"
+
+
+def main(args: Settings):
+    if args.task not in TASKS:
+        raise SystemExit(f"task={args.task}: one of {', '.join(sorted(TASKS))}")
     args.t = TASKS[args.task]
     args.out = args.out or os.path.join(HERE, "results", args.t["out"])
     targets, params, wide_box = args.t["targets"], args.t["params"], args.t["wide"]
@@ -146,7 +156,7 @@ def main():
     names = [n for n in args.targets.split(",") if n] or list(targets)
     so_cfg = None
     for name in names:
-        if args.skip_simopt:  # baselines only (another device call): the SimOpt CSVs are in --out
+        if args.skip_simopt:  # baselines only (another device call): the SimOpt CSVs are in out
             so_cfg = simopt_config(name, targets[name], args)
         else:
             so_cfg = run_simopt(name, targets[name], args)
@@ -267,4 +277,4 @@ def plots(out, task):
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))

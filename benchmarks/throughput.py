@@ -1,11 +1,11 @@
 """Env steps per second: sim2real hopper (physics resampled at every reset) vs Brax MJX vs Gymnasium.
 
     python benchmarks/throughput.py                                   # CPU, batches 64..4096
-    python benchmarks/throughput.py --batches 1024,8192,32768,131072 --tag gpu-h100 --no-gym
+    python benchmarks/throughput.py batches=1024,8192,32768,131072 tag=gpu-h100 gym=false
 
 All three run a uniform random policy. sim2real: jit(scan) of vmapped ``step_autoreset`` with the
 LSDR context (torso size, density, friction, joint damping) drawn uniformly at every reset, the
-env batch split over one CPU device per core with ``sim2real.parallel.batch_map`` (on a one-GPU
+env batch split over one CPU device per core with ``sim2real.envs.parallel.batch_map`` (on a one-GPU
 host this is the plain single-device run). Brax: ``brax.envs.get_environment('hopper',
 backend='mjx')`` wrapped for training (vmap, episode, auto-reset), as its PPO runs it, on one
 device as shipped (``brax_mjx``) and with the same batch split as ours (``brax_mjx_split``);
@@ -16,17 +16,19 @@ Writes ``benchmarks/results/throughput_<tag>.csv`` and ``throughput_<tag>.png``.
 """
 from __future__ import annotations
 
-import argparse
 import csv
+import dataclasses
 import os
 import platform
+import sys
 import time
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real import parallel
+from sim2real.common.cli import settings
+from sim2real.envs import parallel
 
 parallel.use_cpu_cores()  # before anything runs: one CPU device per core
 
@@ -133,16 +135,21 @@ def bench_gym(batch: int, total_steps: int) -> float:
     return batch * n / t
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--batches", default="64,256,1024,4096")
-    ap.add_argument("--steps", type=int, default=100, help="scan length per timed call")
-    ap.add_argument("--gym-steps", type=int, default=20000, help="env steps per timed Gymnasium call")
-    ap.add_argument("--tag", default="cpu")
-    ap.add_argument("--no-brax", action="store_true")
-    ap.add_argument("--no-gym", action="store_true")
-    ap.add_argument("--out", default=RESULTS)
-    args = ap.parse_args()
+@dataclasses.dataclass
+class Settings:
+    """batches: comma-separated env batch sizes; steps: scan length per timed call; gym_steps: env
+    steps per timed Gymnasium call; tag: the rows' label; brax, gym: also time Brax's MJX hopper and
+    Gymnasium's MuJoCo hopper; out: results folder."""
+    batches: str = "64,256,1024,4096"
+    steps: int = 100
+    gym_steps: int = 20000
+    tag: str = "cpu"
+    brax: bool = True
+    gym: bool = True
+    out: str = RESULTS
+
+
+def main(args: Settings):
     batches = [int(b) for b in args.batches.split(",")]
     device = (f"{jax.devices()[0].device_kind} ({jax.default_backend()}) x {len(jax.devices())}, "
               f"{os.cpu_count()} CPU cores, {platform.node()}")
@@ -152,15 +159,15 @@ def main():
         row = {"batch": b, "sim2real": bench_sim2real(b, args.steps, split=split)}
         if split:
             row["sim2real_1dev"] = bench_sim2real(b, args.steps, split=False)
-        if not args.no_brax:
+        if args.brax:
             row["brax_mjx"] = bench_brax(b, args.steps)
             if split:
                 row["brax_mjx_split"] = bench_brax(b, args.steps, split=True)
-        if not args.no_gym:
+        if args.gym:
             row["gymnasium"] = bench_gym(b, args.gym_steps)
         rows.append(row)
         print({k: (round(v) if isinstance(v, float) else v) for k, v in row.items()}, flush=True)
-    if not args.no_gym:
+    if args.gym:
         rows.append({"batch": 1, "gymnasium": bench_gym(1, args.gym_steps)})
         print(rows[-1], flush=True)
     write(rows, args, device)
@@ -198,4 +205,4 @@ def write(rows, args, device):
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))

@@ -10,11 +10,11 @@ set as key=value. Writes DIR/diagnosis.json, DIR/report.md, DIR/fitted.xml and t
 import os
 import sys
 
-from sim2real.cli import main_guard
+from sim2real.common.cli import main_guard
 
 
 def main(argv):
-    from sim2real import config as config_lib
+    from sim2real.common import config as config_lib
     from sim2real.sysid import emps
     from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
 

@@ -11,18 +11,18 @@ checkpoint is evaluated, or ``policy.msgpack`` where the folder has no ``checkpo
 adaptation operator (its inner PPO updates on that cell's physics), then evaluates (few-shot
 evaluation, seed 004 Fig. 1); the un-adapted returns go to ``returns_before.csv``.
 ``progress=false`` hides the progress bar. Every key is a field of
-``sim2real.evaluate.EvaluateConfig`` (``config=eval.yaml`` works as for training).
+``sim2real.tools.evaluate.EvaluateConfig`` (``config=eval.yaml`` works as for training).
 """
 import sys
 
-from sim2real.cli import main_guard
+from sim2real.common.cli import main_guard
 
 
 def main(argv):
     import numpy as np
 
-    from sim2real import config as config_lib
-    from sim2real.evaluate import EvaluateConfig, evaluate_run
+    from sim2real.common import config as config_lib
+    from sim2real.tools.evaluate import EvaluateConfig, evaluate_run
 
     res = evaluate_run(config_lib.load(EvaluateConfig, argv))
     ret = res["returns"]

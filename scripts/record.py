@@ -13,42 +13,34 @@ the position sensor's noise on an MJCF target (m or rad); ``deterministic=false`
 import os
 import sys
 
-from sim2real.cli import main_guard
+from sim2real.common.cli import main_guard
 
 
 def main(argv):
-    from sim2real import config as config_lib
-    from sim2real import output
-    from sim2real.progress import Bar
-    from sim2real.record import from_run, save
+    from sim2real.common import config as config_lib, output
+    from sim2real.common.progress import Bar
+    from sim2real.tools.record import RecordConfig, from_run, save
 
-    a = config_lib.script_args(argv, {"run": "", "target": "", "episodes": 3, "out": "", "seed": 0, "run_seed": 0,
-                                      "noise": 0.0, "deterministic": True, "overwrite": False, "progress": True})
-    if not a["run"] or not a["out"]:
-        raise config_lib.ConfigError("record needs run=RUN_DIR and out=DIR (target=PATH.xml or name=value,...)")
-    if not os.path.exists(os.path.join(a["run"], "config.yaml")):
-        raise FileNotFoundError(f"run={a['run']}: not a run folder (no config.yaml)")
-    if a["episodes"] < 1:
-        raise config_lib.ConfigError(f"episodes={a['episodes']}: must be a positive integer")
-    if not a["noise"] >= 0:
-        raise config_lib.ConfigError(f"noise={a['noise']}: must be >= 0 (a standard deviation)")
-    inputs = [os.path.join(a["run"], "config.yaml")] + ([a["target"]] if a["target"].endswith(".xml") else [])
-    output.check(a["out"], "recordings", inputs=inputs, overwrite=a["overwrite"])
+    a = config_lib.load(RecordConfig, argv)
+    if not os.path.exists(os.path.join(a.run, "config.yaml")):
+        raise FileNotFoundError(f"run={a.run}: not a run folder (no config.yaml)")
+    inputs = [os.path.join(a.run, "config.yaml")] + ([a.target] if a.target.endswith(".xml") else [])
+    output.check(a.out, "recordings", inputs=inputs, overwrite=a.overwrite)
     bars = []
 
     def advance(k, n):  # control steps of the native rollout (an MJX rollout is one jitted call)
         if not bars:
-            bars.append(Bar(a["progress"], n, f"{a['episodes']} episodes on {a['target']}"))
+            bars.append(Bar(a.progress, n, f"{a.episodes} episodes on {a.target}"))
         bars[0].step()
 
     try:
-        rolls, what = from_run(a["run"], a["target"], a["episodes"], a["seed"], a["run_seed"], a["noise"],
-                               a["deterministic"], progress=advance)
+        rolls, what = from_run(a.run, a.target, a.episodes, a.seed, a.run_seed, a.noise,
+                               a.deterministic, progress=advance)
     finally:
         for b in bars:
             b.close()
-    save(rolls, what, a["out"], inputs, a["overwrite"])
-    print(f"wrote {a['episodes']} recordings to {a['out']} ({1 / rolls.dt:g} Hz); returns: "
+    save(rolls, what, a.out, inputs, a.overwrite)
+    print(f"wrote {a.episodes} recordings to {a.out} ({1 / rolls.dt:g} Hz); returns: "
           + ", ".join(f"{r:.1f}" for r in rolls.ret) + f" (mean {what['mean_return']:.1f})")
 
 

@@ -1,16 +1,16 @@
 """Train a policy: ``python scripts/train.py config=configs/pendulum.yaml key=value ...``.
 
-Any field of ``sim2real.train.TrainConfig`` (dotted for nested sections, e.g. ``ppo.lr=1e-3``)
+Any field of ``sim2real.training.driver.TrainConfig`` (dotted for nested sections, e.g. ``ppo.lr=1e-3``)
 can be overridden. ``resume=true`` continues the run folder's latest checkpoint.
 """
 import sys
 
-from sim2real.cli import main_guard
+from sim2real.common.cli import main_guard
 
 
 def main(argv):
-    from sim2real.runs import summary
-    from sim2real.train import config_from_args, train
+    from sim2real.training.runs import summary
+    from sim2real.training.driver import config_from_args, train
 
     cfg = config_from_args(argv)
     out = train(cfg)

@@ -26,14 +26,14 @@ _EXPORTS = {
     "PPO": "sim2real.rl.ppo:PPO",
     "PPOConfig": "sim2real.rl.ppo:PPOConfig",
     "DRConfig": "sim2real.algos.base:DRConfig",
-    "TrainConfig": "sim2real.train:TrainConfig",
-    "train": "sim2real.train:train",
-    "load_policy": "sim2real.runs:load_policy",
+    "TrainConfig": "sim2real.training.runs:TrainConfig",
+    "train": "sim2real.training.driver:train",
+    "load_policy": "sim2real.training.runs:load_policy",
     "DiagnoseConfig": "sim2real.sysid.diagnose:DiagnoseConfig",
     "diagnose": "sim2real.sysid.diagnose:diagnose",
     "load_recordings": "sim2real.sysid.recordings:load_all",
     "Recording": "sim2real.sysid.recordings:Recording",
-    "ConfigError": "sim2real.config:ConfigError",
+    "ConfigError": "sim2real.common.config:ConfigError",
 }
 __getattr__, __dir__, __all__ = exports(__name__, _EXPORTS)
 __all__ = __all__ + ["__version__"]

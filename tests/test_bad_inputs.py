@@ -13,7 +13,7 @@ import shutil
 import numpy as np
 import pytest
 
-from sim2real.cli import main_guard
+from sim2real.common.cli import main_guard
 from sim2real.envs.base import ASSETS
 from sim2real.sysid.recordings import save_csv
 
@@ -262,8 +262,8 @@ def test_csv_with_a_byte_order_mark(lab):
 
 
 def test_whole_numbers_in_float_notation_are_integers():
-    from sim2real import config as config_lib
-    from sim2real.train import TrainConfig
+    from sim2real.common import config as config_lib
+    from sim2real.training.driver import TrainConfig
 
     assert config_lib.load(TrainConfig, ["total_steps=1e5"]).total_steps == 100000
     with pytest.raises(config_lib.ConfigError, match="expected an integer"):

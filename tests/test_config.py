@@ -1,11 +1,13 @@
 """Config files and key=value overrides, including the errors users see."""
+import importlib.util
 import os
+import sys
 
 import pytest
 
-from sim2real import config as config_lib
-from sim2real.config import ConfigError
-from sim2real.train import TrainConfig
+from sim2real.common import config as config_lib
+from sim2real.common.config import ConfigError
+from sim2real.training.driver import TrainConfig
 
 
 def test_yaml_and_overrides(tmp_path):
@@ -55,7 +57,7 @@ def test_every_bundled_training_config_builds_its_algorithm():
     import glob
 
     from sim2real.envs import make
-    from sim2real.train import TrainConfig, build_algo
+    from sim2real.training.driver import TrainConfig, build_algo
 
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     paths = sorted(glob.glob(os.path.join(root, "configs", "*.yaml")))
@@ -69,7 +71,7 @@ def test_every_bundled_training_config_builds_its_algorithm():
 
 
 def test_progress_bar_closes_and_can_be_disabled():
-    from sim2real.progress import Bar
+    from sim2real.common.progress import Bar
 
     with Bar(True, 2, "work") as bar:
         bar.step()
@@ -82,19 +84,57 @@ def test_progress_bar_closes_and_can_be_disabled():
     assert not hasattr(off, "p")
 
 
-def test_script_args_convert_to_the_defaults_types_and_name_bad_keys():
-    from sim2real.config import ConfigError, script_args, split_args
+def test_settings_dataclasses_read_text_as_written_choices_and_required_keys():
+    import dataclasses
+    from typing import Any, Literal
 
-    d = {"steps": 100, "rate": 0.5, "out": "", "plot": False}
-    got = script_args(["steps=2e3", "rate=1", "out=a=b", "plot=true"], d)
-    assert got == {"steps": 2000, "rate": 1.0, "out": "a=b", "plot": True}
-    assert d["steps"] == 100  # the defaults are not changed
-    own, rest = split_args(["steps=5", "ppo.lr=1e-3"], d)
-    assert own["steps"] == 5 and rest == ["ppo.lr=1e-3"]
-    for bad, match in ((["stepz=3"], "unknown argument 'stepz'; arguments: out, plot, rate, steps"),
-                       (["steps=2.5"], "steps='2.5': must be int"),
-                       (["rate=fast"], "rate='fast': must be float"),
-                       (["plot=maybe"], "plot='maybe': must be bool"),
+    from sim2real.common.config import ConfigError, load, split
+
+    @dataclasses.dataclass
+    class S:
+        part: Literal["a", "b"]
+        steps: int = 100
+        rate: float = 0.5
+        tag: str = ""
+        cases: tuple[str, ...] = ()
+        plot: bool = False
+        extra: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+    got = load(S, ["part=b", "steps=2e3", "rate=1", "tag=0.10", "cases=[x,y@z]", "plot=true", "extra.min_t=1.0"])
+    assert got == S("b", 2000, 1.0, "0.10", ("x", "y@z"), True, {"min_t": 1.0})  # tag kept as written
+    assert load(S, ["part=a", "cases=one"]).cases == ("one",)
+    for bad, match in ((["part=c"], "part: 'c' is not one of a, b"),
+                       ([], "missing required key part"),
+                       (["part=a", "stepz=3"], "unknown config key 'stepz'. Did you mean: steps"),
+                       (["part=a", "steps=2.5"], "steps: expected an integer"),
+                       (["part=a", "rate=fast"], "rate: expected a number"),
+                       (["part=a", "plot=maybe"], "plot: expected true/false"),
                        (["steps"], "not of the form key=value")):
         with pytest.raises(ConfigError, match=match):
-            script_args(bad, d)
+            load(S, bad)
+    mine, rest = split(["part=a", "ppo.lr=1e-3", "config=c.yaml", "extra.k=1"], S)
+    assert mine == ["part=a", "extra.k=1"] and rest == ["ppo.lr=1e-3", "config=c.yaml"]
+
+
+def test_every_benchmark_reads_its_settings_through_config_load():
+    """Each benchmark script declares a ``Settings`` dataclass (no argparse, no ``sys.path`` edits)."""
+    import pathlib
+
+    from sim2real.common.config import ConfigError, load
+
+    root = pathlib.Path(__file__).resolve().parents[1] / "benchmarks"
+    for path in sorted(root.glob("*.py")):
+        text = path.read_text()
+        assert "argparse" not in text and "sys.path.insert" not in text, path.name
+        if "def main(" not in text:
+            continue  # a module of helpers (sysid_cases, plot_*)
+        assert "class Settings" in text, path.name
+    spec = importlib.util.spec_from_file_location("bench_reps_update", root / "reps_update.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    assert load(mod.Settings, ["real=[1,3,5]", "tag=h100"]).real == (1, 3, 5)
+    with pytest.raises(ConfigError, match="Did you mean: samples"):
+        load(mod.Settings, ["sample=5"])
+
+

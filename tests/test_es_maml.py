@@ -62,8 +62,8 @@ DRIVER_BASE = ["env=prismatic", "env_options.episode_length=20", "progress=false
 
 
 def driver_config(out_dir, *extra):
-    from sim2real import config as config_lib
-    from sim2real.train import TrainConfig
+    from sim2real.common import config as config_lib
+    from sim2real.training.driver import TrainConfig
 
     return config_lib.load(TrainConfig, [f"out_dir={out_dir}", *DRIVER_BASE, *extra])
 
@@ -81,7 +81,7 @@ def load_script(name):
 @pytest.fixture(scope="module")
 def udr_run(tmp_path_factory):
     """A finished 1-seed uniform-DR run: the warm start of the driver tests."""
-    from sim2real.train import train
+    from sim2real.training.driver import train
 
     return train(driver_config(tmp_path_factory.mktemp("udr"), "name=udr", "total_steps=128"))
 
@@ -89,7 +89,7 @@ def udr_run(tmp_path_factory):
 def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tmp_path, udr_run):
     """algo=es_maml through scripts/train.py's driver: the jitted meta step vmapped over 2 seeds,
     warm-started from a 1-seed uniform-DR run, interrupted and resumed = uninterrupted."""
-    from sim2real.train import train
+    from sim2real.training.driver import train
 
     per_update = 4 * (2 * 64 + 20)  # population x (inner updates x batch + one 20-step scoring episode)
     es = ["algo=es_maml", "num_seeds=2", "updates_per_chunk=1", f"total_steps={2 * per_update}",
@@ -132,7 +132,7 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
 
 
 def test_warm_start_must_match_the_network(tmp_path, udr_run):
-    from sim2real.train import build_algo  # (the driver reads warm starts; no algorithm reads run folders)
+    from sim2real.training.driver import build_algo  # (the driver reads warm starts; no algorithm reads run folders)
 
     env = make("prismatic", episode_length=20)
     cfg = driver_config(tmp_path, "algo=es_maml", "ppo.net.hidden=[8,8]",

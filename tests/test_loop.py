@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 import yaml
 
-from sim2real import config as config_lib
+from sim2real.common import config as config_lib
 from sim2real.algos import from_diagnosis
 from sim2real.algos.base import DRConfig
 from sim2real.envs import make
-from sim2real.loop import env_model_path
-from sim2real.record import native, simulated
+from sim2real.tools.loop import env_model_path
+from sim2real.tools.record import native, simulated
 from sim2real.sysid import recordings as rec_lib
-from sim2real.train import TrainConfig, train
+from sim2real.training.driver import TrainConfig, train
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PLANT = os.path.join(ROOT, "benchmarks", "plants", "pendulum_real.xml")

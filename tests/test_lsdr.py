@@ -5,10 +5,10 @@ import jax
 import numpy as np
 import pytest
 
-from sim2real import config as config_lib
+from sim2real.common import config as config_lib
 from sim2real.dists import binned
 from sim2real.envs import make
-from sim2real.train import TrainConfig, build_algo, train
+from sim2real.training.driver import TrainConfig, build_algo, train
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

@@ -1,4 +1,4 @@
-"""Splitting the env batch over CPU devices (sim2real.parallel) gives the same rollout as one device.
+"""Splitting the env batch over CPU devices (sim2real.envs.parallel) gives the same rollout as one device.
 
 Runs in a subprocess: the CPU device count can only be chosen before JAX starts, and this test
 process already has one device.
@@ -9,7 +9,7 @@ import textwrap
 
 SCRIPT = textwrap.dedent("""
     import jax, jax.numpy as jnp, numpy as np
-    from sim2real import parallel
+    from sim2real.envs import parallel
     assert parallel.use_cpu_cores(2) == 2
     from sim2real.envs import make
     env = make("pendulum")

@@ -5,7 +5,8 @@ import sys
 
 import pytest
 
-PACKAGES = ["sim2real", "sim2real.sysid", "sim2real.physics", "sim2real.algos", "sim2real.rl"]
+PACKAGES = ["sim2real", "sim2real.sysid", "sim2real.physics", "sim2real.algos", "sim2real.rl", "sim2real.training",
+            "sim2real.tools", "sim2real.common"]
 
 
 @pytest.mark.parametrize("package", PACKAGES)
@@ -19,7 +20,7 @@ def test_every_export_resolves(package):
 
 
 def test_import_is_cheap_and_silent():
-    code = ("import sys, sim2real, sim2real.sysid, sim2real.physics, sim2real.algos, sim2real.rl\n"
+    code = (f"import sys, {', '.join(PACKAGES)}\n"
             "heavy = [m for m in ('jax', 'mujoco', 'mujoco.mjx', 'flax') if m in sys.modules]\n"
             "assert not heavy, heavy\n"
             "print(sim2real.__version__)")
@@ -36,10 +37,10 @@ def test_mjx_import_drops_only_the_missing_warp_lines():
 
 
 def test_an_algorithm_must_meet_the_outer_loop_contract():
-    from sim2real import config as config_lib
+    from sim2real.common import config as config_lib
     from sim2real.algos import registry
     from sim2real.envs import make
-    from sim2real.train import TrainConfig
+    from sim2real.training.driver import TrainConfig
 
     registry.register("not_a_loop", lambda env, cfg: object())
     try:
@@ -49,11 +50,36 @@ def test_an_algorithm_must_meet_the_outer_loop_contract():
         registry.BUILDERS.pop("not_a_loop")
 
 
-def test_no_algorithm_imports_the_driver():
-    """The driver sits above the algorithms: none of them imports ``sim2real.train``."""
+# Each subpackage imports only from the layers below it (and itself): the driver above the
+# algorithms, the algorithms above the PPO and the diagnosis, those above the envs.
+LAYERS = {"common": 0, "physics": 0, "dists": 0, "envs": 1, "rl": 2, "sysid": 2, "algos": 3, "training": 4,
+          "tools": 5}
+
+
+def _sim2real_imports(path):
+    import ast
+
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("sim2real"):
+            if node.module == "sim2real":
+                yield from (f"sim2real.{a.name}" for a in node.names)
+            else:
+                yield node.module
+        elif isinstance(node, ast.Import):
+            yield from (a.name for a in node.names if a.name.startswith("sim2real"))
+
+
+def test_subpackages_import_only_the_layers_below_them():
     import pathlib
 
-    root = pathlib.Path(importlib.import_module("sim2real.algos").__file__).parent
-    for path in root.glob("*.py"):
-        text = path.read_text()
-        assert "sim2real.train" not in text and "from sim2real import train" not in text, path.name
+    root = pathlib.Path(importlib.import_module("sim2real").__file__).parent
+    found = {p.name for p in root.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+    assert found == set(LAYERS), "a new subpackage needs its layer here"
+    assert not [p.name for p in root.glob("*.py") if not p.name.startswith("_")], "loose top-level modules"
+    for pkg, layer in LAYERS.items():
+        for path in (root / pkg).rglob("*.py"):
+            for mod in _sim2real_imports(path):
+                target = mod.split(".")[1]
+                if target.startswith("_") or target == pkg:
+                    continue
+                assert LAYERS[target] < layer, f"{path.relative_to(root)} imports {mod} (layer {target})"

@@ -203,8 +203,8 @@ def test_driver_interrupted_and_resumed_equals_uninterrupted(tmp_path):
     """SimOpt run by the one training driver (``algo: simopt``): stop after two iterations, resume,
     end as an uninterrupted run (state, per-iteration metrics.csv and the distribution history in
     arrays.npz); with recordings, ``resume=true`` may bring new ones (and nothing else)."""
-    from sim2real import config as config_lib
-    from sim2real.train import TrainConfig, config_from_args, train
+    from sim2real.common import config as config_lib
+    from sim2real.training.driver import TrainConfig, config_from_args, train
 
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -255,7 +255,7 @@ def test_simopt_runs_through_the_training_script(tmp_path, capsys):
     one driver; its run folder is read back like any other (``load_policy``)."""
     import importlib.util
 
-    from sim2real.runs import load_policy
+    from sim2real.training.runs import load_policy
 
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     spec = importlib.util.spec_from_file_location("train_script", os.path.join(root, "scripts", "train.py"))

@@ -7,10 +7,10 @@ import jax
 import numpy as np
 import pytest
 
-from sim2real import config as config_lib
-from sim2real.evaluate import episodes
-from sim2real.runs import load_run
-from sim2real.train import TrainConfig, train
+from sim2real.common import config as config_lib
+from sim2real.rl.episodes import episodes
+from sim2real.training.runs import load_run
+from sim2real.training.driver import TrainConfig, train
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -96,7 +96,7 @@ def test_load_run_for_evaluation(tmp_path):
 def test_checkpoint_restore_places_leaves_like_the_template(tmp_path):
     """Restored leaves match the template's dtype and commitment, so a jitted step that took the
     template does not compile again for the restored state (a resumed run compiled its chunk twice)."""
-    from sim2real import checkpoint
+    from sim2real.training import checkpoint
 
     step = jax.jit(lambda s: jax.tree_util.tree_map(lambda x: x + 1, s))
     template = jax.jit(lambda: {"w": jax.numpy.zeros((2, 3)), "n": jax.numpy.zeros((), jax.numpy.int32),
@@ -133,7 +133,7 @@ def test_refused_resume_changes_nothing_and_names_the_differences(tmp_path):
     assert "Traceback" not in str(e.value)
     assert _tree(tmp_path / "r") == before
     # from the command line: the saved config is the config; other keys are refused by name
-    from sim2real.train import config_from_args
+    from sim2real.training.driver import config_from_args
 
     with pytest.raises(config_lib.ConfigError, match="not ppo.lr"):
         config_from_args([f"out_dir={tmp_path}", "name=r", "resume=true", "ppo.lr=0.1"])
@@ -152,8 +152,8 @@ def test_resuming_a_finished_run_says_so_or_extends_it(tmp_path):
 def test_ctrl_c_stops_after_the_chunk_with_a_checkpoint(tmp_path, monkeypatch):
     import signal
 
-    from sim2real import train as train_lib
-    from sim2real.cli import Stopped
+    from sim2real.training import driver as train_lib
+    from sim2real.common.cli import Stopped
 
     write = train_lib.MetricsLogger.write
 

@@ -32,7 +32,7 @@ from flax import struct
 from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.algos.registry import register
 from sim2real.envs.base import Env
-from sim2real.evaluate import episodes
+from sim2real.rl.episodes import episodes
 from sim2real.rl import networks, normalize
 from sim2real.rl.ppo import PPO, PPOConfig, PPOState
 from sim2real.rl.rollout import init_runner
@@ -199,7 +199,7 @@ def grad_estimate(es: Open_ES, es_params, es_state, fitness_fn, key):
 
 
 def _build(env, cfg):
-    from sim2real import config as config_lib
+    from sim2real.common import config as config_lib
 
     opts = config_lib.from_dict(ESMAMLConfig, cfg.algo_options, "algo_options.")
     algo = ESMAML(env, cfg.ppo, cfg.dr, opts)

@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 
 from sim2real.algos.base import DRConfig
-from sim2real.config import ConfigError
+from sim2real.common.config import ConfigError
 from sim2real.envs.base import Env
 from sim2real.physics import catalog
 

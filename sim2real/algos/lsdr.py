@@ -28,13 +28,13 @@ import numpy as np
 import optax
 from flax import struct
 
-from sim2real import config as config_lib
+from sim2real.common import config as config_lib
 from sim2real import dists
 from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.algos.registry import register
 from sim2real.dists import binned, gaussian
 from sim2real.envs.base import Env
-from sim2real.evaluate import episodes
+from sim2real.rl.episodes import episodes
 from sim2real.rl import epopt
 from sim2real.rl.ppo import PPO, PPOConfig, PPOState
 from sim2real.rl.rollout import Context

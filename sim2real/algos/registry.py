@@ -1,7 +1,7 @@
 """Algorithm names -> builders of ``OuterLoop``s (``algos/base.py`` states the contract)."""
 from __future__ import annotations
 
-from sim2real import config as config_lib
+from sim2real.common import config as config_lib
 from sim2real.physics.params import UnknownNameError, unknown_name_message
 
 

@@ -35,13 +35,13 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from sim2real import config as config_lib
+from sim2real.common import config as config_lib
 from sim2real.algos import reps
 from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.algos.registry import register
 from sim2real.dists import gaussian
 from sim2real.envs.base import Env
-from sim2real.evaluate import closed_loop
+from sim2real.rl.episodes import closed_loop
 from sim2real.rl.ppo import PPO, PPOConfig, PPOState
 from sim2real.sysid import discrepancy
 

@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 from flax import struct
-from sim2real import config as config_lib
+from sim2real.common import config as config_lib
 from sim2real._mjx import mjx
 
 from sim2real.physics import catalog, stepper

@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from sim2real import parallel
+from sim2real.envs import parallel
 from sim2real.envs.autoreset import step_autoreset
 from sim2real.envs.base import Env, State
 from sim2real.rl import networks, normalize

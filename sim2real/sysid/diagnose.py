@@ -10,7 +10,7 @@ adds effects while they improve predictions of the validation segments significa
 check on the held-out recordings keeps nothing that predicts them worse than the nominal model
 (``answer``: ``effects``, ``none`` or ``inconclusive``); ``report`` and ``export`` write the
 result. Everything is written to a hidden folder that replaces ``out`` only when the diagnosis
-is complete, and only if ``out`` is a folder sim2real made (``sim2real.output``).
+is complete, and only if ``out`` is a folder sim2real made (``sim2real.common.output``).
 """
 from __future__ import annotations
 
@@ -23,8 +23,8 @@ import time
 import mujoco
 import numpy as np
 
-from sim2real import output
-from sim2real.progress import Bar
+from sim2real.common import output
+from sim2real.common.progress import Bar
 from sim2real.sysid import invdyn, locate, report
 from sim2real.sysid.candidates import ALL_EFFECTS, EFFECTS, library, scales_from
 from sim2real.sysid.derivatives import velocity_state

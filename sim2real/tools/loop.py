@@ -18,7 +18,47 @@ import dataclasses
 import os
 
 from sim2real.envs.base import ASSETS
-from sim2real.train import TrainConfig
+from sim2real.training.driver import TrainConfig
+
+
+@dataclasses.dataclass
+class LoopConfig:
+    """``scripts/loop.py``'s own settings (every other ``key=value`` is the training config's, and
+    ``diagnose.<key>=value`` a diagnosis option).
+
+    Attributes:
+      target: the "real" system, an MJCF stepped by native MuJoCo.
+      out: the loop's folder (``nominal/``, ``iter_<k>/``, ``loop.json``).
+      run: a trained run to start from (empty: the config is trained first, ``out/nominal``).
+      iterations: record -> diagnose -> retrain rounds (>= 1).
+      episodes: recorded episodes per iteration (>= 2: the last one is held out).
+      seed: initial states of the recordings; noise: the target's position-sensor noise (m or rad).
+      eval_episodes: episodes on the target that score each policy at the end (>= 1).
+      deterministic: record the policy's mean action; overwrite: replace an earlier loop folder;
+      progress: progress bars.
+    """
+    target: str = ""
+    out: str = ""
+    run: str = ""
+    iterations: int = 1
+    episodes: int = 3
+    seed: int = 0
+    noise: float = 0.0
+    eval_episodes: int = 64
+    deterministic: bool = True
+    overwrite: bool = False
+    progress: bool = True
+
+    def __post_init__(self):
+        from sim2real.common.config import ConfigError
+
+        if not self.target or not self.out:
+            raise ConfigError("loop needs target=PATH.xml (the real system) and out=DIR")
+        for k in ("iterations", "eval_episodes"):
+            if getattr(self, k) < 1:
+                raise ConfigError(f"{k}={getattr(self, k)}: must be a positive integer")
+        if self.episodes < 2:
+            raise ConfigError(f"episodes={self.episodes}: must be >= 2 (the last one is held out)")
 
 
 def env_model_path(env) -> str:
@@ -32,11 +72,11 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
               progress: bool = False) -> dict:
     """One loop iteration from the policy of ``run_dir`` (seed ``run_seed``); returns what it did
     (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded episodes)."""
-    from sim2real import config as config_lib
+    from sim2real.common import config as config_lib
     from sim2real.envs.registry import env_class
-    from sim2real.record import from_run, save
+    from sim2real.tools.record import from_run, save
     from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
-    from sim2real.train import train
+    from sim2real.training.driver import train
 
     if episodes < 2:
         raise config_lib.ConfigError(f"episodes={episodes}: the loop needs >= 2 (the last one is held out)")

@@ -17,12 +17,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real import checkpoint, parallel
-from sim2real import config as config_lib
+from sim2real.training import checkpoint
+from sim2real.envs import parallel
+from sim2real.common import config as config_lib
 from sim2real.envs import make
 # TrainConfig and build_algo live with the run folder (``runs.py``, below the algorithms) and are
 # re-exported here: ``train(cfg)`` takes the one and calls the other
-from sim2real.runs import MetricsLogger, Progress, Run, TrainConfig, _without_warm_start, build_algo, export_policy
+from sim2real.training.runs import MetricsLogger, Progress, Run, TrainConfig, _without_warm_start, build_algo, export_policy
 
 
 def steps_per_update(cfg: TrainConfig, algo) -> int:
@@ -153,8 +154,8 @@ def train(cfg: TrainConfig) -> dict:
 
     Nothing is written until the config is validated and the algorithm built; a resume that fails
     or is refused changes nothing on disk. SIGINT / SIGTERM stop after the chunk under way, with a
-    checkpoint (``sim2real.cli.Stopped``)."""
-    from sim2real.cli import Stopped, stop_on_signal
+    checkpoint (``sim2real.common.cli.Stopped``)."""
+    from sim2real.common.cli import Stopped, stop_on_signal
 
     validate(cfg)
     if cfg.resume:

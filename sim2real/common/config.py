@@ -2,8 +2,10 @@
 
     python scripts/train.py config=configs/pendulum_udr.yaml ppo.lr=1e-3 ppo.net.hidden=[128,128]
 
-Values are parsed as YAML (``true``, ``1e-3``, ``[1, 2]``); dotted keys reach nested dataclasses;
-an unknown key is an error that lists the nearest valid keys.
+Values are parsed as YAML (``true``, ``1e-3``, ``[1, 2]``) except for text fields, which keep the
+text as written (``tag=0.10`` stays ``'0.10'``); dotted keys reach nested dataclasses; an unknown key
+is an error that lists the nearest valid keys; a ``Literal`` field names its choices; a field
+without a default must be given. Every script and benchmark reads its settings this way.
 """
 from __future__ import annotations
 
@@ -46,6 +48,10 @@ def _coerce(value, t, where: str):
     origin = typing.get_origin(t)
     args = typing.get_args(t)
     if t is Any:
+        return value
+    if origin is typing.Literal:
+        if value not in args:
+            raise ConfigError(f"{where}: {value!r} is not one of {', '.join(map(str, args))}")
         return value
     if origin in (typing.Union, types.UnionType):
         if value is None and type(None) in args:
@@ -116,6 +122,10 @@ def from_dict(cls, d: dict, prefix: str = ""):
         if k not in names:
             raise _unknown(k, cls, prefix)
         kwargs[k] = _coerce(v, hints[k], prefix + k)
+    missing = [prefix + f.name for f in dataclasses.fields(cls) if f.name not in kwargs
+               and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+    if missing:
+        raise ConfigError(f"missing required key{'s' * (len(missing) > 1)} {', '.join(missing)}")
     return cls(**kwargs)
 
 
@@ -132,7 +142,21 @@ def to_dict(cfg) -> dict:
     return conv(cfg)
 
 
-def _set(d: dict, dotted: str, value, cls):
+def _is_text(t) -> bool:
+    """A ``str`` (or ``str | None``) field: its override is kept as written (``out=2024``, ``tag=0.10``)."""
+    if typing.get_origin(t) in (typing.Union, types.UnionType):
+        return set(typing.get_args(t)) == {str, type(None)}
+    return t is str
+
+
+def _parse(text: str, t):
+    if _is_text(t) and not (text in ("null", "~") and t is not str):
+        return text
+    return yaml.safe_load(text) if text != "" else ""
+
+
+def _set(d: dict, dotted: str, text: str, cls):
+    """Put the override ``dotted=text`` into the nested dict ``d``, its text parsed for the field's type."""
     parts = dotted.split(".")
     cur_cls, cur = cls, d
     for i, p in enumerate(parts):
@@ -140,14 +164,14 @@ def _set(d: dict, dotted: str, value, cls):
         if p not in names:
             raise _unknown(p, cur_cls, ".".join(parts[:i]) + ("." if i else ""))
         if i == len(parts) - 1:
-            cur[p] = value
+            cur[p] = _parse(text, _hints(cur_cls)[p])
             return
         t = _hints(cur_cls)[p]
         if typing.get_origin(t) is dict:  # free-form section (checked later by its owner)
             cur = cur.setdefault(p, {})
             for q in parts[i + 1:-1]:
                 cur = cur.setdefault(q, {})
-            cur[parts[-1]] = value
+            cur[parts[-1]] = _parse(text, Any)
             return
         if not dataclasses.is_dataclass(t):
             raise ConfigError(f"'{'.'.join(parts[:i + 1])}' is not a section; cannot set '{dotted}'")
@@ -164,8 +188,9 @@ def _merge(base: dict, extra: dict) -> dict:
     return out
 
 
-def parse_args(argv: list[str]) -> tuple[str | None, dict[str, Any]]:
-    """``['config=a.yaml', 'ppo.lr=1e-3']`` -> ``('a.yaml', {'ppo.lr': 0.001})``."""
+def parse_args(argv: list[str], raw: bool = False) -> tuple[str | None, dict[str, Any]]:
+    """``['config=a.yaml', 'ppo.lr=1e-3']`` -> ``('a.yaml', {'ppo.lr': 0.001})`` (values read as YAML;
+    with ``raw`` the texts as written, for ``load`` to read by each field's type)."""
     path, overrides = None, {}
     for a in argv:
         if "=" not in a:
@@ -175,61 +200,21 @@ def parse_args(argv: list[str]) -> tuple[str | None, dict[str, Any]]:
         if k == "config":
             path = v
         else:
-            overrides[k] = yaml.safe_load(v) if v != "" else ""
+            overrides[k] = v if raw else _parse(v, Any)
     return path, overrides
 
 
-def split_args(argv: list[str], defaults: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
-    """A script's own ``key=value`` arguments, apart from the rest (``argv`` entries, for ``load``).
-
-    Returns ``(own, rest)``: ``own`` is ``defaults`` updated by the arguments whose key it has,
-    each converted to its default's type (an int default takes ``1e6``-style numbers, a string
-    default takes the text as written); an argument that is not ``key=value`` or whose value does
-    not convert raises ``ConfigError`` naming the key.
-    """
-    own, rest = dict(defaults), []
-    for a in argv:
-        if "=" not in a:
-            raise ConfigError(f"argument '{a}' is not of the form key=value")
-        k, v = a.split("=", 1)
-        k = k.strip().lstrip("-")
-        if k not in defaults:
-            rest.append(a)
-            continue
-        kind = type(defaults[k])
-        try:
-            if kind is bool:
-                val = yaml.safe_load(v)
-                if not isinstance(val, bool):
-                    raise ValueError
-                own[k] = val
-            elif kind is int:
-                f = float(v)
-                if f != int(f):
-                    raise ValueError
-                own[k] = int(f)
-            elif kind is float:
-                own[k] = float(v)
-            else:
-                own[k] = v
-        except (ValueError, OverflowError):
-            raise ConfigError(f"{k}={v!r}: must be {kind.__name__} (default {defaults[k]!r})") from None
-    return own, rest
-
-
-def script_args(argv: list[str], defaults: dict[str, Any]) -> dict[str, Any]:
-    """A script's ``key=value`` arguments over ``defaults`` (``split_args``); an unknown key raises
-    ``ConfigError`` listing the known ones."""
-    own, rest = split_args(argv, defaults)
-    if rest:
-        k = rest[0].split("=", 1)[0]
-        raise ConfigError(f"unknown argument '{k}'; arguments: {', '.join(sorted(defaults))}")
-    return own
+def split(argv: list[str], cls) -> tuple[list[str], list[str]]:
+    """``argv`` parted into the ``key=value``s of ``cls``'s fields and the rest (another config's),
+    for a script that takes its own settings and, say, a ``TrainConfig``'s."""
+    names = {f.name for f in dataclasses.fields(cls)}
+    mine = [a for a in argv if a.split("=", 1)[0].strip().lstrip("-").split(".")[0] in names]
+    return mine, [a for a in argv if a not in mine]
 
 
 def load(cls, argv: list[str]):
     """Config of type ``cls`` from ``config=PATH`` (YAML) and ``key=value`` overrides."""
-    path, overrides = parse_args(argv)
+    path, overrides = parse_args(argv, raw=True)
     data: dict = {}
     if path:
         try:

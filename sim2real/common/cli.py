@@ -83,10 +83,34 @@ def _quiet_swallowed_interrupt(previous_hook):
     return hook
 
 
+def settings(cls, argv):
+    """A benchmark's settings: dataclass ``cls`` from ``key=value`` arguments (``config.load``).
+
+    ``-h`` prints the script's docstring and every setting with its default, then exits 0; a bad key
+    or value prints ``error: ...`` (with "did you mean") and exits 2. Errors after this point keep
+    their tracebacks (a benchmark's failure is a bug to read, not a user's typo).
+    """
+    import dataclasses
+
+    from sim2real.common.config import ConfigError, load
+
+    if any(a in ("-h", "--help", "help") for a in argv):
+        print(sys.modules["__main__"].__doc__ or "")
+        print("settings (key=value):")
+        for f in dataclasses.fields(cls):
+            print(f"  {f.name}={f.default!r}" if f.default is not dataclasses.MISSING else f"  {f.name} (required)")
+        sys.exit(0)
+    try:
+        return load(cls, argv)
+    except ConfigError as e:
+        print(f"error: {e}", file=sys.stderr)
+        sys.exit(2)
+
+
 def main_guard(fn, argv):
     """Run ``fn(argv)``; user errors print ``error: ...`` to stderr and exit with status 2; Ctrl-C
     and SIGTERM exit with status 130 after the job's own clean-up ran."""
-    from sim2real.config import ConfigError
+    from sim2real.common.config import ConfigError
 
     if any(a in ("-h", "--help", "help") for a in argv):
         print(sys.modules["__main__"].__doc__ or "")

@@ -1,6 +1,6 @@
 """A plain rich progress bar for the loops of the scripts (fits, evaluation, recording).
 
-The training driver has its own bar (steps/s and return columns, ``sim2real.runs.Progress``).
+The training driver has its own bar (steps/s and return columns, ``sim2real.training.runs.Progress``).
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ class Bar:
 
     def step(self, n: int = 1, text: str | None = None):
         # every step is a safe point for a SIGTERM that was swallowed where it landed
-        from sim2real.cli import raise_if_terminated
+        from sim2real.common.cli import raise_if_terminated
 
         raise_if_terminated()
         if self.enabled:

@@ -79,7 +79,7 @@ def policy(env: Env, ppo, params, obs_stats, z_ctx, deterministic: bool = True):
     ``z_ctx [P]``: the physics a context-conditioned policy is told (on a real system the true
     one is unknown: the run's nominal belief).
     """
-    from sim2real.evaluate import action
+    from sim2real.rl.episodes import action
     from sim2real.rl import networks
 
     ctx = ppo.ctx(jnp.asarray(z_ctx))
@@ -238,12 +238,12 @@ def simulated(env: Env, z, act, episodes: int, key) -> Rollouts:
 
 
 def save(rolls: Rollouts, what: dict, folder: str, inputs=(), overwrite: bool = False) -> list[str]:
-    """Write the recordings and ``record.json`` into ``folder``, staged (``sim2real.output``: the
+    """Write the recordings and ``record.json`` into ``folder``, staged (``sim2real.common.output``: the
     folder appears complete or not at all; only a recordings folder sim2real made is replaced).
     Returns the recordings' final paths."""
     import json
 
-    from sim2real import output
+    from sim2real.common import output
 
     with output.staged(folder, "recordings", inputs=inputs, overwrite=overwrite) as tmp:
         names = [os.path.basename(p) for p in rolls.write(tmp)]
@@ -270,13 +270,51 @@ def parse_target(text: str) -> tuple[str, dict[str, float]]:
     return "", values
 
 
+@dataclasses.dataclass
+class RecordConfig:
+    """What ``scripts/record.py`` rolls and where it writes (``key=value`` on its command line).
+
+    Attributes:
+      run: the trained run folder (its ``config.yaml``).
+      target: an MJCF file (native MuJoCo), ``name=value,...`` (the run's env with those physics
+        values), or empty (the run's own physics).
+      episodes: episodes to record (>= 1).
+      out: the recordings folder (``episode_000.csv``..., ``record.json``).
+      seed: initial states and noise; run_seed: which of the run's seeds acts.
+      noise: std of the position sensor's noise on an MJCF target (m or rad, >= 0).
+      deterministic: the policy's mean action (``false``: sampled, more excitation).
+      overwrite: replace an earlier recordings folder (only one sim2real made).
+      progress: a progress bar.
+    """
+    run: str = ""
+    target: str = ""
+    episodes: int = 3
+    out: str = ""
+    seed: int = 0
+    run_seed: int = 0
+    noise: float = 0.0
+    deterministic: bool = True
+    overwrite: bool = False
+    progress: bool = True
+
+    def __post_init__(self):
+        from sim2real.common.config import ConfigError
+
+        if not self.run or not self.out:
+            raise ConfigError("record needs run=RUN_DIR and out=DIR (target=PATH.xml or name=value,...)")
+        if self.episodes < 1:
+            raise ConfigError(f"episodes={self.episodes}: must be a positive integer")
+        if not self.noise >= 0:
+            raise ConfigError(f"noise={self.noise}: must be >= 0 (a standard deviation)")
+
+
 def from_run(run_dir: str, target: str, episodes: int, seed: int = 0, run_seed: int = 0, noise: float = 0.0,
              deterministic: bool = True, progress=None) -> tuple[Rollouts, dict]:
     """Episodes of seed ``run_seed``'s policy of a run on ``target`` (see :func:`parse_target`).
 
     Returns the rollouts and a description of what was rolled (for ``record.json``).
     """
-    from sim2real.runs import load_policy
+    from sim2real.training.runs import load_policy
 
     cfg, env, algo, params, stats = load_policy(run_dir)
     if not 0 <= run_seed < cfg.num_seeds:

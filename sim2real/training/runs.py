@@ -18,8 +18,9 @@ from typing import Any
 import jax
 import numpy as np
 
-from sim2real import checkpoint, output
-from sim2real import config as config_lib
+from sim2real.training import checkpoint
+from sim2real.common import output
+from sim2real.common import config as config_lib
 from sim2real.algos.base import DRConfig
 from sim2real.envs import make
 from sim2real.rl.ppo import PPOConfig
@@ -136,7 +137,7 @@ class Run:
 
     def prepare(self) -> None:
         """Create the run folder (a folder sim2real did not make is never replaced:
-        ``sim2real.output``) and write the resolved config."""
+        ``sim2real.common.output``) and write the resolved config."""
         self.check()
         if not self.cfg.resume:
             output.create(self.dir, "run", overwrite=self.cfg.overwrite, key="name")

@@ -18,7 +18,7 @@ Two ways, for two kinds of function:
   functions that reduce over the batch (a PPO update): XLA's partitioner inserts the
   communication.
 
-    import sim2real.parallel as par
+    import sim2real.envs.parallel as par
     par.use_cpu_cores()                 # first, before any JAX computation
     roll = par.batch_map(roll, batch)   # roll(state, z, keys) -> same, leaves [B, ...]
     state, z, keys = roll(state, z, keys)
