@@ -24,13 +24,13 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 from flax import struct
-from sim2real.common import config as config_lib
 from sim2real._mjx import mjx
 
+from sim2real.common import config as config_lib
 from sim2real.physics import catalog, stepper
-from sim2real.physics.effects import Effects, EffectsConfig, EffectState
-from sim2real.physics.model_apply import PhysicsModel
-from sim2real.physics.params import Param, ParamSpec, clip, in_bounds
+from sim2real.physics.effects import EffectState
+from sim2real.physics.params import Param, clip, in_bounds
+from sim2real.physics.plant import Plant
 
 ASSETS = os.path.join(os.path.dirname(__file__), "assets")
 # A state entry beyond this counts as diverged (NaN/inf fail the comparison too): far past any
@@ -115,16 +115,13 @@ class Env:
         if self.config.out_of_bounds not in OUT_OF_BOUNDS:
             raise ValueError(f"env '{self.name}': out_of_bounds={self.config.out_of_bounds!r}; "
                              f"choose one of {list(OUT_OF_BOUNDS)}")
-        self.mj_model = self.load_model()
-        spec_params = self.declare_params(self.mj_model) + catalog.common_params(self.mj_model, self.config.max_delay)
-        self.spec = ParamSpec(spec_params)
-        self.physics = PhysicsModel(self.mj_model, self.spec, self.joint_damping_dofs(self.mj_model))
-        self.mj_model = self.physics.mj  # the model MJX runs (saturation clamps added), for parity
-        self.effects = Effects(
-            self.mj_model, self.spec,
-            EffectsConfig(max_delay=self.config.max_delay, coulomb_eps=self.config.coulomb_eps),
-        )
-        self._data0 = mjx.make_data(self.physics.mx)
+        m = self.load_model()
+        # the plant the diagnosis fits too (physics/plant.py); its parts under the names envs use
+        self.plant = Plant(m, self.declare_params(m), self.config.max_delay, self.config.coulomb_eps,
+                           self.joint_damping_dofs(m))
+        self.spec, self.physics, self.effects = self.plant.spec, self.plant.physics, self.plant.effects
+        self.mj_model = self.plant.mj  # the model MJX runs (saturation clamps added), for parity
+        self._data0 = self.plant.data0
         m = self.mj_model
         self.ctrl_low = np.where(m.actuator_ctrllimited, m.actuator_ctrlrange[:, 0], -np.inf).astype(np.float32)
         self.ctrl_high = np.where(m.actuator_ctrllimited, m.actuator_ctrlrange[:, 1], np.inf).astype(np.float32)

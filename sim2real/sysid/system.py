@@ -3,8 +3,8 @@
 The parameter spec has the *nominal* parameters a model writer sets (body masses, declared joint
 damping and friction loss, actuator gains) and every effect of the library on every joint,
 actuator and body, all neutral by default, so the nominal model is ``spec.default`` and a
-fitted model is another ``z``. The plant is the one the envs step (``PhysicsModel.apply`` +
-``Effects`` + ``stepper.advance``), at the recordings' sample period.
+fitted model is another ``z``. The plant is the one the envs step (``physics/plant.py``:
+``PhysicsModel.apply`` + ``Effects``, stepped by ``stepper.advance``), at the recordings' sample period.
 
 What MJX cannot run as written is changed here, and said in ``notes``: the ``implicit`` and
 ``RK4`` integrators (and Euler without implicit damping) run as ``implicitfast``, whose implicit
@@ -17,13 +17,10 @@ from __future__ import annotations
 import os
 
 import mujoco
-import numpy as np
-from sim2real._mjx import mjx
 
 from sim2real.physics import catalog
-from sim2real.physics.effects import Effects, EffectsConfig
-from sim2real.physics.model_apply import PhysicsModel
-from sim2real.physics.params import Param, ParamSpec
+from sim2real.physics.params import Param
+from sim2real.physics.plant import Plant
 from sim2real.sysid.trajectory import ModelColumns
 
 
@@ -117,22 +114,20 @@ class System:
         params += effect
         params += catalog.payload_position_params(m, moving)
         params += catalog.backlash_inertia_params(m, range(m.nu))
-        params += catalog.common_params(m, max_delay)
         if declared_fl:
             m.dof_frictionloss[:] = 0.0
             self.notes.append("declared frictionloss (" + ", ".join(f"{jn[j]} {v:g}" for j, v in declared_fl.items())
                               + ") is simulated as the effects library's Coulomb friction and re-fitted")
-        self.spec = ParamSpec(params)
+        # the plant the envs step (physics/plant.py), at the recordings' sample period
+        self.plant = Plant(m, params, max_delay, coulomb_eps)
+        self.spec, self.physics, self.effects = self.plant.spec, self.plant.physics, self.plant.effects
+        self.mj, self.data0 = self.plant.mj, self.plant.data0
         # Positions and commands alone identify forces only up to a common scale (scaling every
         # mass, damping and gain together leaves the motion unchanged), so something must anchor
         # the scale: the actuator gains (known from the drive's datasheet) by default.
         kinds = ("body_mass", "dof_damping") + (("actuator_gain", "actuator_kv") if refit_gains else ())
         self.nominal = [p.name for p in params if p.kind in kinds or
                         (p.kind == "coulomb" and p.index in declared_fl)]
-        self.physics = PhysicsModel(m, self.spec)
-        self.mj = self.physics.mj
-        self.effects = Effects(self.mj, self.spec, EffectsConfig(max_delay=max_delay, coulomb_eps=coulomb_eps))
-        self.data0 = mjx.make_data(self.physics.mx)
 
     def _adapt(self, m: mujoco.MjModel, dt: float | None, substeps: int | None = None) -> None:
         """Integrator, timestep and solver settings MJX can run (``notes`` says what changed)."""
