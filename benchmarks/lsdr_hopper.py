@@ -10,8 +10,9 @@ the Gaussian run, learned vs fixed DR at test time, EPOpt with learned vs unifor
     ... scale=0.02                                   # tiny budgets, to check the script on CPU
 
 Each part writes ``benchmarks/results/lsdr_hopper/<part>.npz`` / ``.csv`` (and ``part=plots``
-the PNGs). Every run trains ``seeds`` seeds in one ``jit(vmap(scan))`` through the same
-algorithm objects as ``scripts/train.py``. Priors are the paper's Table I boxes; values below a
+the PNGs). Every run trains ``seeds`` seeds in one ``jit(vmap(scan))`` through the training
+driver of ``scripts/train.py`` (run folders in ``work``; its ``test`` section evaluates the test
+grid between chunks; fine-tuning starts from the trained run with ``algo_options.warm_start``). Priors are the paper's Table I boxes; values below a
 parameter's physical lower bound (negative sizes, friction, damping) are clipped to it in the
 simulator (README, bounds rule); with ``out_of_bounds=terminate`` such a context is a robot that
 cannot exist instead: its episodes end at the first step with reward 0.
@@ -59,34 +60,28 @@ def config(extra: list[str], steps: float, a):
     return config_lib.load(TrainConfig, args)
 
 
-def run(cfg, chunks_between_evals: int = 0, evaluate=None, state=None, log=print):
-    """Train ``cfg``; returns (state, history rows, probs [C, S, D, bins] or None, algo, env)."""
-    import jax
+def run(cfg, a, test_every: int = 0, test: tuple = (), warm_start: str = "", log=print):
+    """Train ``cfg`` through the driver (run folder ``a.work/<name>``, replaced), the policy tested on
+    the physics ``test = (names, grid)`` before every ``test_every``-th chunk and after the last
+    (``TestConfig``: the grid clipped into the bounds, one episode per context and seed);
+    ``warm_start``: a finished run folder whose policy starts this one (fine-tuning).
 
-    from sim2real.envs import make
-    from sim2real.training.driver import build_algo, make_chunk, num_chunks
+    Returns ``(run folder, rows, probs [C, S, D, bins] or None, dists [(mean, cov) per chunk])``: a
+    row per chunk (train return, distribution entropy and evaluation return) and per test.
+    """
+    from sim2real.training.driver import train
+    from sim2real.training.runs import TestConfig
 
-    env = make(cfg.env, **cfg.env_options)
-    algo = build_algo(cfg, env)
-    seeds = jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds)
-    fresh = jax.jit(jax.vmap(algo.init))(seeds)
-    if state is not None:  # fine-tuning: trained policy, fresh optimiser and learning-rate schedule
-        ppo = fresh.ppo.replace(params=state.ppo.params, obs_stats=state.ppo.obs_stats)
-        state = fresh.replace(ppo=ppo)
-    else:
-        state = fresh
-    chunk = make_chunk(algo, cfg.updates_per_chunk)
-    n_chunks = num_chunks(cfg, algo)
-    rows, probs, dists = [], [], []
+    K, batch = cfg.updates_per_chunk, cfg.ppo.batch_size
+    tc = TestConfig(every=test_every, params=tuple(test[0]), points=tuple(tuple(float(v) for v in g) for g in test[1]),
+                    episodes=1, seed=7, out_of_bounds="clip") if test_every else TestConfig()
+    opts = dict(cfg.algo_options, warm_start=warm_start) if warm_start else cfg.algo_options
+    cfg = dataclasses.replace(cfg, out_dir=a.work, overwrite=True, test=tc, algo_options=opts)
+    chunks, probs, dists = [], [], []
     t0 = time.time()
-    for c in range(n_chunks):
-        if evaluate is not None and chunks_between_evals and c % chunks_between_evals == 0:
-            rows.append({"chunk": c, "env_steps": c * cfg.updates_per_chunk * cfg.ppo.batch_size,
-                         **evaluate(algo, env, state)})
-        state, m = chunk(state, c * cfg.updates_per_chunk)
-        m = jax.tree_util.tree_map(np.asarray, m)
-        row = {"chunk": c + 1, "env_steps": (c + 1) * cfg.updates_per_chunk * cfg.ppo.batch_size,
-               "wall_seconds": round(time.time() - t0, 2),
+
+    def on_chunk(c, m):
+        row = {"chunk": c + 1, "env_steps": (c + 1) * K * batch, "wall_seconds": round(time.time() - t0, 2),
                "train_return": float(np.nanmean(np.where(m["episodes"] > 0, m["episode_return"], np.nan))),
                "dist_entropy": float(np.nanmean(m["dist_entropy"])) if "dist_entropy" in m else np.nan,
                "dist_eval_return": float(np.nanmean(m["dist_eval_return"])) if "dist_eval_return" in m else np.nan}
@@ -94,39 +89,23 @@ def run(cfg, chunks_between_evals: int = 0, evaluate=None, state=None, log=print
             probs.append(m["dist_probs"][:, -1])  # [S, D, bins] at the chunk's end
         if "dist_mean" in m:
             dists.append((m["dist_mean"][:, -1], m["dist_cov"][:, -1]))
-        if evaluate is not None and chunks_between_evals and c == n_chunks - 1:
-            row.update(evaluate(algo, env, state))
-        rows.append(row)
-        log(f"  chunk {c + 1}/{n_chunks}: {row['env_steps']:,} steps, train return "
-            f"{row['train_return']:.0f}, {row['wall_seconds']:.0f} s")
-    return state, rows, (np.stack(probs) if probs else None), dists, algo, env
+        chunks.append(row)
+        log(f"  chunk {c + 1}: {row['env_steps']:,} steps, train return {row['train_return']:.0f}, "
+            f"{row['wall_seconds']:.0f} s")
 
-
-def test_evaluator(names, grid, fixed_base_overrides=None, episodes_per=1):
-    """``evaluate(algo, env, state) -> {'test_return': mean over grid and seeds, 'test_grid': [S, N]}``."""
-    import jax
-    import jax.numpy as jnp
-
-    from sim2real.rl.episodes import episodes
-
-    cache = {}
-
-    def evaluate(algo, env, state):
-        if "f" not in cache:
-            idx = env.spec.indices(names)
-            base = jnp.asarray(env.default_z())
-            zs = jnp.stack([base.at[idx].set(jnp.asarray(g, jnp.float32)) for g in grid])
-            zs = jnp.asarray(np.asarray(jax.vmap(lambda z: jnp.clip(z, env.spec.low, env.spec.high))(zs)))
-
-            def one(st):
-                params, stats = algo.policy(st)
-                return episodes(env, algo.ppo, params, stats, zs, jax.random.PRNGKey(7), episodes_per)["return"].mean(-1)
-
-            cache["f"] = jax.jit(jax.vmap(one))
-        r = np.asarray(cache["f"](state))  # [S, N]
-        return {"test_return": float(r.mean()), "test_grid": r.tolist()}
-
-    return evaluate
+    out = train(cfg, on_chunk)
+    tests = {}
+    if test_every:
+        with np.load(os.path.join(out["run_dir"], "test.npz")) as f:
+            tests = {int(c): {"test_return": float(r.mean()), "test_grid": r.tolist()}
+                     for c, r in zip(f["chunk"], f["returns"])}
+    rows = []
+    for row in chunks:  # a test before a chunk is its own row; the one after the last joins its row
+        c = row["chunk"] - 1
+        if c in tests:
+            rows.append({"chunk": c, "env_steps": c * K * batch, **tests[c]})
+        rows.append(dict(row, **tests.get(row["chunk"], {})) if row["chunk"] == len(chunks) else row)
+    return out["run_dir"], rows, (np.stack(probs) if probs else None), dists
 
 
 def uniform_fit(centers, p):
@@ -193,7 +172,7 @@ def part_ranges(a, log):
                       f"algo_options.dist_start={a.dist_start}", f"updates_per_chunk={a.chunk}",
                       f"algo_options.alpha={a.alpha}"],
                      a.steps, a)
-        _, rows, probs, _, _, _ = run(cfg, log=log)
+        _, rows, probs, _ = run(cfg, a, log=log)
         edges = np.linspace(prior[0], prior[1], probs.shape[-1] + 1)
         centers = (edges[1:] + edges[:-1]) / 2
         fits = [uniform_fit(centers, probs[-1, s, 0]) for s in range(probs.shape[1])]
@@ -229,7 +208,6 @@ def part_gaussian(a, log):
     hi = [TABLE_I[n][0][1] for n in names]
     axes = [np.linspace(TABLE_I[n][0][0], TABLE_I[n][0][1], 10) for n in GRID_PAIR]
     grid = [[u, v] for u in axes[0] for v in axes[1]]
-    evaluate = test_evaluator(list(GRID_PAIR), grid)
     path = os.path.join(a.out, f"gaussian{a.tag}_grid.json")
     result = json.load(open(path)) if os.path.exists(path) else {}
     for algo in a.algos.split(","):
@@ -242,7 +220,7 @@ def part_gaussian(a, log):
                       f"algo_options.center={a.center}", f"algo_options.lr={a.dist_lr}",
                       f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
                       f"updates_per_chunk={a.chunk}"], a.steps, a)
-        _, rows, _, dists, _, _ = run(cfg, sys.maxsize, evaluate, log=log)  # evaluate first and last
+        _, rows, _, dists = run(cfg, a, 10**9, (GRID_PAIR, grid), log=log)  # test first and last
         final = rows[-1]
         log(f"  grid return {final['test_return']:.0f} (mean over {len(grid)} contexts and {a.seeds} seeds)")
         result[algo] = {"test_grid": final["test_grid"], "test_return": final["test_return"],
@@ -264,7 +242,6 @@ def part_transfer(a, log, optimizer="ppo"):
     """Learned vs fixed DR on torso size; then both fine-tuned on the full test range (Fig. 8)."""
     prior = TABLE_I["torso_size"][0]
     grid = [[g] for g in np.linspace(prior[0], prior[1], 16)]
-    evaluate = test_evaluator(["torso_size"], grid)
     tag = "transfer" if optimizer == "ppo" else "epopt"
     path = os.path.join(a.out, f"{tag}.json")
     # one device call may run one algorithm (algos): merge into what earlier calls wrote
@@ -277,13 +254,13 @@ def part_transfer(a, log, optimizer="ppo"):
                       f"dr.high=[{prior[1]}]", "algo_options.dist=binned", f"algo_options.num_contexts={a.contexts}",
                       f"algo_options.dist_every={a.dist_every}", f"algo_options.dist_start={a.dist_start}",
                       f"updates_per_chunk={a.chunk}"] + extra_opt, a.steps, a)
-        st, rows, probs, _, _, _ = run(cfg, a.eval_every, evaluate, log=log)
+        trained, rows, probs, _ = run(cfg, a, a.eval_every, (["torso_size"], grid), log=log)
         result[algo] = {"train": rows}
         if optimizer == "ppo":
             log(f"  fine-tuning {algo} on the test range (fixed uniform DR over it)")
             ft = config([f"name={tag}_{algo}_ft", "algo=fixed_dr", "dr.params=[torso_size]", f"dr.low=[{prior[0]}]",
                          f"dr.high=[{prior[1]}]", f"updates_per_chunk={a.chunk}"], a.ft_steps, a)
-            _, ft_rows, _, _, _, _ = run(ft, a.eval_every, evaluate, state=st, log=log)
+            _, ft_rows, _, _ = run(ft, a, a.eval_every, (["torso_size"], grid), warm_start=trained, log=log)
             result[algo]["finetune"] = ft_rows
         if probs is not None:
             np.savez(os.path.join(a.out, f"{tag}_{algo}_probs.npz"), probs=probs)
@@ -418,12 +395,12 @@ class Settings:
     """part (required): what to run. only: (ranges) one parameter; steps: env steps per seed per run;
     ft_steps: fine-tuning steps; seeds; contexts: K, episodes per distribution update;
     epopt_contexts; dist_every, dist_start: distribution updates every/after so many PPO updates;
-    chunk: PPO updates per jitted chunk; eval_every: chunks between test evaluations; scale:
+    chunk: PPO updates per jitted chunk; eval_every: chunks between test evaluations (the driver's ``test``); scale:
     multiplies every budget; alpha: (ranges/gaussian) LSDR's KL(p || p_phi) weight; algos:
     (gaussian/transfer/epopt) which runs, comma-separated; sample_from: (gaussian) where the score
     term's contexts come from (the paper: learned p_phi); center: (gaussian) centre the returns by
     their running mean (ema, the paper) or the batch mean; dist_lr: (gaussian) Adam step on phi;
-    out: results folder; tag: (gaussian) suffix of the result files; out_of_bounds: physics outside
+    out: results folder; work: the runs' folders (replaced); tag: (gaussian) suffix of the result files; out_of_bounds: physics outside
     the parameters' bounds: simulate the bound (clip), or end the episode at once with reward 0
     (terminate; the paper's simulator: negative sizes/masses fail)."""
     part: Literal["ranges", "gaussian", "transfer", "epopt", "plots", "table"]
@@ -444,6 +421,7 @@ class Settings:
     center: Literal["ema", "batch"] = "ema"
     dist_lr: float = 0.05
     out: str = OUT
+    work: str = "/tmp/lsdr_hopper_runs"
     tag: str = ""
     out_of_bounds: Literal["clip", "terminate"] = "clip"
 

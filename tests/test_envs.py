@@ -156,3 +156,16 @@ def test_reset_draws_new_physics(key):
     assert bool(done) and bool(tr.truncated)
     assert 2.0 <= float(z2[idx]) <= 3.0 and int(s2.t) == 0
     assert float(tr.z[idx]) == pytest.approx(1.0)  # the finished step ran under the old physics
+
+
+def test_an_env_module_is_found_by_its_name_without_a_registry_line(tmp_path, monkeypatch):
+    import sim2real.envs as pkg
+    from sim2real.envs import registry
+
+    (tmp_path / "toy_env.py").write_text(
+        "from sim2real.envs.pendulum import Pendulum\n\n\nclass Toy(Pendulum):\n    name = 'toy_pendulum'\n")
+    monkeypatch.setattr(pkg, "__path__", [*pkg.__path__, str(tmp_path)])
+    monkeypatch.setattr(registry, "_ENVS", {})
+    assert "toy_pendulum" in registry.names() and "pendulum" in registry.names()
+    assert registry.make("toy_pendulum").name == "toy_pendulum"
+    monkeypatch.setattr(registry, "_ENVS", {})  # (the next lookup reloads without the toy)

@@ -178,3 +178,64 @@ def test_updates_where_no_episode_ended_log_nan_not_zero(tmp_path):
 
     rows = list(csv.DictReader(open(tmp_path / "n" / "metrics.csv")))
     assert rows[0]["episodes"] == "0" and rows[0]["episode_return"] == "nan"
+
+
+TEST = ["test.every=2", "test.params=[mass:pole]", "test.points=[[0.5],[2.0],[-1.0]]", "test.out_of_bounds=clip"]
+
+
+def test_the_driver_tests_the_policy_between_chunks_and_resumes_its_log(tmp_path):
+    """``test``: every seed's deterministic policy on fixed physics before chunks 0, 2, ... and
+    after the last; the last evaluation is the final policy's; an interrupted run's log equals an
+    uninterrupted one's."""
+    env_cap = ["env_options.episode_length=40", "num_seeds=2"]
+    full = train(tiny(tmp_path, "name=full", *env_cap, *TEST))  # 4 chunks of 2 updates
+    with np.load(tmp_path / "full" / "test.npz") as f:
+        assert f["chunk"].tolist() == [0, 2, 4] and f["returns"].shape == (3, 2, 3)
+        assert f["env_steps"].tolist() == [0, 2 * 2 * 128, 4 * 2 * 128]
+        z, returns = f["z"], f["returns"]
+    env, algo = full["env"], full["algo"]
+    lo = env.spec.low[env.spec.index("mass:pole")]
+    assert z[2, env.spec.index("mass:pole")] == lo > -1.0  # clipped into the bounds
+    params, stats = algo.policy(full["state"])
+    for s in range(2):  # the last row is the final policy, evaluated independently here
+        one = jax.tree_util.tree_map(lambda x: x[s], (params, stats))
+        r = episodes(env, algo.ppo, *one, z, jax.random.PRNGKey(7), 1)["return"].mean(-1)
+        np.testing.assert_allclose(returns[-1, s], np.asarray(r), rtol=1e-5)
+    rows = open(tmp_path / "full" / "test.csv").read().strip().splitlines()
+    assert rows[0] == "chunk,env_steps,seed,test_return" and len(rows) == 1 + 3 * 2
+    train(tiny(tmp_path, "name=part", *env_cap, *TEST, "max_chunks=3"))
+    train(tiny(tmp_path, "name=part", *env_cap, *TEST, "resume=true"))
+    with np.load(tmp_path / "part" / "test.npz") as f:
+        assert f["chunk"].tolist() == [0, 2, 4]
+        np.testing.assert_array_equal(f["returns"], returns)
+
+
+@pytest.mark.parametrize("extra, match", [
+    (["test.points=[[-1.0]]", "test.out_of_bounds=refuse"], "test.points.*mass:pole"),
+    (["test.params=[mass:pol]"], "mass:pole"),
+    (["test.points=[[1.0, 2.0]]"], r"test.points\[0\] has 2 values for 1 test.params"),
+])
+def test_bad_test_physics_is_refused_before_anything_is_written(tmp_path, extra, match):
+    with pytest.raises((ValueError, KeyError), match=match):
+        train(tiny(tmp_path, "name=bad", *TEST, *extra))
+    assert not os.path.exists(tmp_path / "bad")
+
+
+def test_lsdr_warm_start_continues_a_trained_policy_with_a_fresh_optimiser(tmp_path):
+    from sim2real.training.runs import build_algo, load_policy
+
+    box = ["dr.params=[mass:pole]", "dr.low=[0.8]", "dr.high=[1.2]", "num_seeds=2"]
+    train(tiny(tmp_path, "name=a", "algo=fixed_dr", "ppo.net.use_context=true", *box))
+    _, _, _, params, stats = load_policy(str(tmp_path / "a"))
+    cfg = tiny(tmp_path, "name=b", "algo=fixed_dr", "ppo.net.use_context=true", *box,
+               f"algo_options.warm_start={tmp_path / 'a'}")
+    from sim2real.envs import make
+
+    algo = build_algo(cfg, make("pendulum"))
+    st = algo.init_seeds(jax.random.split(jax.random.PRNGKey(0), 2))
+    for x, y in zip(jax.tree_util.tree_leaves(st.ppo.params), jax.tree_util.tree_leaves(params)):
+        np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+    assert (np.asarray(st.ppo.update_step) == 0).all()  # a fresh learning-rate schedule
+    with pytest.raises(ValueError, match="ppo.net"):
+        build_algo(tiny(tmp_path, "name=c", "algo=fixed_dr", *box, f"algo_options.warm_start={tmp_path / 'a'}"),
+                   make("pendulum"))

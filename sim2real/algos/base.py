@@ -76,8 +76,8 @@ class OuterLoop:
     """The contract between an outer-loop algorithm and the training driver (``train.py``).
 
     The driver calls only what is declared here, jitted and vmapped over seeds; an algorithm
-    subclasses this, sets ``env`` and ``ppo`` (a :class:`~sim2real.rl.ppo.PPO`) and implements the
-    first three methods. The defaults say what an algorithm that does not override them gets.
+    subclasses this, sets ``env``, ``ppo`` (a :class:`~sim2real.rl.ppo.PPO`) and ``space`` (its
+    :class:`DRSpace`: the box and the base physics) and implements the first three methods. The defaults say what an algorithm that does not override them gets.
 
     Attributes:
       takes_update_index: ``update`` is called as ``update(state, i)`` with the unbatched update
@@ -85,10 +85,16 @@ class OuterLoop:
       warm_start_from: a finished run folder whose policy starts this algorithm (set from the
         algorithm's options); the driver reads it and calls :meth:`start_from` -- reading run
         folders is the driver's, so no algorithm imports it.
+      warm: ``(params [S, ...], obs_stats [S, ...])`` of that policy once :meth:`start_from` ran
+        (None otherwise); the algorithm's ``init_seeds`` starts from it.
+      adapts: the algorithm meta-learns a policy that adapts to given physics (:meth:`adapt`;
+        ES-MAML): ``scripts/evaluate.py adapt=true`` evaluates it after adaptation.
     """
 
     takes_update_index: bool = False
     warm_start_from: str = ""
+    warm: Any = None
+    adapts: bool = False
 
     def init(self, key) -> Any:
         """One seed's state from a PRNG key."""
@@ -118,10 +124,21 @@ class OuterLoop:
         algorithm that counts its own iterations (SimOpt) says so here."""
         return max(1, total_steps // self.env_steps_per_update())
 
-    def start_from(self, params, obs_stats) -> None:
-        """Start every seed from a finished run's policy (``[S or 1, ...]``); only algorithms that
-        set ``warm_start_from`` are asked."""
-        raise NotImplementedError(f"{type(self).__name__} takes no warm start")
+    def adapt(self, params, obs_stats, z, key) -> tuple[Any, Any, Any]:
+        """Few-shot adaptation of one seed's policy to physics ``z [P]``: ``(params, obs_stats,
+        train_return)``; only algorithms with ``adapts`` implement it."""
+        raise NotImplementedError(f"{type(self).__name__} does not adapt")
+
+    def start_from(self, params, obs_stats, num_seeds: int) -> None:
+        """Keep a finished run's policy (``[1 or num_seeds, ...]``; the driver checked its env,
+        network and seed count) as ``warm``, one copy per seed; only algorithms that set
+        ``warm_start_from`` are asked, and their ``init_seeds`` uses it."""
+        import jax
+        import jax.numpy as jnp
+
+        n = jax.tree_util.tree_leaves(params)[0].shape[0]
+        tile = lambda x: jnp.repeat(jnp.asarray(x), num_seeds // n, axis=0)  # noqa: E731
+        self.warm = jax.tree_util.tree_map(tile, (params, obs_stats))
 
 
 def metrics_mean(m: dict[str, Any]) -> dict[str, Any]:

@@ -92,7 +92,6 @@ class ESMAML(OuterLoop):
         self.es = Open_ES(population_size=cfg.population, solution=template, use_antithetic_sampling=True,
                           optimizer=optax.adam(cfg.meta_lr), std_schedule=optax.constant_schedule(cfg.sigma))
         self.es_params = self.es.default_params
-        self.warm = None  # (params [S, ...], obs_stats [S, ...]) set by ``start_from``
 
     # ----------------------------------------------------------------------------------------
     def sample_task(self, key):
@@ -115,12 +114,6 @@ class ESMAML(OuterLoop):
             return jax.vmap(self.init)(keys)
         return jax.vmap(self.init)(keys, *self.warm)
 
-    def start_from(self, params, obs_stats) -> None:
-        """Meta-parameters from a finished run's policy (the driver checked its env and network)."""
-        n = jax.tree_util.tree_leaves(params)[0].shape[0]
-        tile = lambda x: jnp.repeat(jnp.asarray(x), self.num_seeds // n, axis=0)  # noqa: E731
-        self.warm = jax.tree_util.tree_map(tile, (params, obs_stats))
-
     def theta(self, st: ESMAMLState):
         """Meta-parameters as the network's pytree (with the state's leading seed axes, if any)."""
         if st.es.mean.ndim > 1:  # the driver exports the policies of all seeds at once
@@ -128,6 +121,8 @@ class ESMAML(OuterLoop):
         return self.es.get_mean(st.es)
 
     # ------------------------------------------------------------------- adaptation U ----
+    adapts = True
+
     def adapt(self, params, obs_stats, z, key):
         """``inner_updates`` PPO updates on fixed physics ``z [P]`` from ``params``.
 
@@ -203,7 +198,7 @@ def _build(env, cfg):
 
     opts = config_lib.from_dict(ESMAMLConfig, cfg.algo_options, "algo_options.")
     algo = ESMAML(env, cfg.ppo, cfg.dr, opts)
-    algo.warm_start_from, algo.num_seeds = opts.warm_start, cfg.num_seeds
+    algo.warm_start_from = opts.warm_start
     return algo
 
 

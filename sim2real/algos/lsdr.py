@@ -66,6 +66,9 @@ class LSDRConfig:
       eval_horizon: steps of each evaluation episode (0: the env's episode length).
       policy_optimizer: ``ppo`` | ``epopt``.
       epopt: EPOpt settings when ``policy_optimizer == 'epopt'``.
+      warm_start: a finished run folder (same env and network) whose policy starts every seed:
+        its parameters and observation statistics, with a fresh optimiser, learning-rate schedule
+        and distribution (fine-tuning a trained policy on a new box).
     """
 
     dist: str = "binned"
@@ -83,6 +86,7 @@ class LSDRConfig:
     eval_horizon: int = 0
     policy_optimizer: str = "ppo"
     epopt: epopt.EPOptConfig = epopt.EPOptConfig()
+    warm_start: str = ""
 
 
 @struct.dataclass
@@ -160,6 +164,14 @@ class LSDR(OuterLoop):
         phi = self.init_dist()
         return LSDRState(self.ppo.init(k_ppo, self.sampler(phi)), phi, self.tx.init(phi), jnp.zeros(()),
                          jnp.ones(()), jnp.zeros((), bool), k_next, jnp.zeros((), jnp.int32))
+
+    def init_seeds(self, keys) -> LSDRState:
+        """``init`` for every seed's key ``[S, 2]``; the policy from the warm start when one is loaded."""
+        st = jax.vmap(self.init)(keys)
+        if self.warm is None:
+            return st
+        params, obs_stats = self.warm
+        return st.replace(ppo=st.ppo.replace(params=params, obs_stats=obs_stats))
 
     takes_update_index = True  # the training driver passes the (unbatched) update index
 
@@ -271,7 +283,9 @@ class LSDR(OuterLoop):
 
 def _build(env, cfg, learn_dist=True):
     opts = config_lib.from_dict(LSDRConfig, cfg.algo_options, "algo_options.")
-    return LSDR(env, cfg.ppo, cfg.dr, opts, cfg.num_updates, learn_dist=learn_dist)
+    algo = LSDR(env, cfg.ppo, cfg.dr, opts, cfg.num_updates, learn_dist=learn_dist)
+    algo.warm_start_from = opts.warm_start
+    return algo
 
 
 register("lsdr", _build)

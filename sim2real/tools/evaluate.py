@@ -110,9 +110,9 @@ def evaluate_run(cfg: EvaluateConfig) -> dict:
         rcfg, env, algo, all_params, all_stats = load_policy(run)
     for n in axes:
         env.spec.index(n)  # an unknown name lists the known ones
-    zs, names = grid(env, axes, base=algo.space.base if hasattr(algo, "space") else None)
+    zs, names = grid(env, axes, base=algo.space.base)
     env.check_z(zs)
-    if cfg.adapt and not hasattr(algo, "adapt"):
+    if cfg.adapt and not algo.adapts:
         raise config_lib.ConfigError(f"adapt=true needs an algorithm with an adaptation operator "
                                      f"(es_maml); run '{run}' trained algo '{rcfg.algo}'")
     key = jax.random.PRNGKey(cfg.seed)

@@ -23,7 +23,8 @@ from sim2real.common import config as config_lib
 from sim2real.envs import make
 # TrainConfig and build_algo live with the run folder (``runs.py``, below the algorithms) and are
 # re-exported here: ``train(cfg)`` takes the one and calls the other
-from sim2real.training.runs import MetricsLogger, Progress, Run, TrainConfig, _without_warm_start, build_algo, export_policy
+from sim2real.training.runs import (MetricsLogger, Progress, Run, TestLog, TrainConfig, _without_warm_start, build_algo,
+                                    export_policy, test_physics)
 
 
 def steps_per_update(cfg: TrainConfig, algo) -> int:
@@ -56,6 +57,24 @@ def make_chunk(algo, updates: int):
         return strong_types(state), jax.tree_util.tree_map(lambda x: jnp.swapaxes(x, 0, 1), metrics)
 
     return jax.jit(chunk)
+
+
+def make_tester(cfg: TrainConfig, env, algo):
+    """``jit(test)(state [S, ...]) -> returns [S, N]``: every seed's deterministic policy on the
+    test contexts ``zs [N, P]`` (``TestConfig``), mean over ``test.episodes`` full episodes; with
+    ``zs``. ``(None, None)`` when ``test.every`` is 0."""
+    if not cfg.test.every:
+        return None, None
+    from sim2real.rl.episodes import episodes
+
+    zs = test_physics(cfg.test, env)
+    key = jax.random.PRNGKey(cfg.test.seed)
+
+    def one(state):
+        params, stats = algo.policy(state)
+        return episodes(env, algo.ppo, params, stats, jnp.asarray(zs), key, cfg.test.episodes)["return"].mean(-1)
+
+    return jax.jit(jax.vmap(one)), zs
 
 
 def strong_types(tree):
@@ -149,8 +168,12 @@ def _resumable_options(algo: str) -> tuple[str, ...]:
     return registry.resumable_options(algo)
 
 
-def train(cfg: TrainConfig) -> dict:
+def train(cfg: TrainConfig, on_chunk=None) -> dict:
     """Run (or resume) training; returns ``{'state', 'metrics', 'run_dir', 'algo', 'env', 'finished'}``.
+
+    ``on_chunk(chunk_index, metrics)``, if given, is called after every chunk with its metrics
+    (numpy ``[S, K, ...]``, as ``metrics.csv`` and ``arrays.npz`` get them) for a caller that keeps
+    its own records (a benchmark).
 
     Nothing is written until the config is validated and the algorithm built; a resume that fails
     or is refused changes nothing on disk. SIGINT / SIGTERM stop after the chunk under way, with a
@@ -176,6 +199,7 @@ def train(cfg: TrainConfig) -> dict:
     init = jax.jit(lambda k: strong_types(algo.init_seeds(k)))  # (init_seeds: warm starts)
     chunk = make_chunk(algo, cfg.updates_per_chunk)
     per_update = steps_per_update(cfg, algo)
+    tester, test_zs = make_tester(cfg, env, algo)
     start = 0
     if cfg.resume:
         mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints, create=False)
@@ -198,6 +222,10 @@ def train(cfg: TrainConfig) -> dict:
     run.prepare()  # the first write: config validated, algorithm built, checkpoint read
     mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints)
     logger = MetricsLogger(run, cfg, resume_from_update=start * cfg.updates_per_chunk, steps_per_update=per_update)
+    tests = TestLog(run, cfg, test_zs, start) if tester else None
+
+    def test(chunks_done):
+        tests.write(chunks_done, chunks_done * cfg.updates_per_chunk * per_update, np.asarray(tester(state)))
     end = n_chunks if not cfg.max_chunks else min(n_chunks, start + cfg.max_chunks)
     bar = Progress(cfg, total=n_chunks * cfg.updates_per_chunk * per_update,
                    done=start * cfg.updates_per_chunk * per_update)
@@ -205,13 +233,19 @@ def train(cfg: TrainConfig) -> dict:
     try:
         with stop_on_signal() as stop:
             for c in range(start, end):
+                if tester and c % cfg.test.every == 0:
+                    test(c)
                 t0 = time.perf_counter()
                 state, metrics = chunk(state, c * cfg.updates_per_chunk)
                 metrics = jax.tree_util.tree_map(np.asarray, metrics)  # [S, K] per metric
                 dt = time.perf_counter() - t0
                 logger.write(c, metrics, dt)
+                if on_chunk is not None:
+                    on_chunk(c, metrics)
                 last = metrics
                 done_chunks = c + 1
+                if tester and done_chunks == n_chunks:  # (before the checkpoint: a resume redoes it)
+                    test(done_chunks)
                 if done_chunks % cfg.checkpoint_every == 0 or done_chunks == end or stop.requested:
                     checkpoint.save(mngr, done_chunks, state)
                 bar.advance(cfg.updates_per_chunk * per_update * cfg.num_seeds / dt,

@@ -13,7 +13,7 @@ import csv
 import dataclasses
 import os
 import time
-from typing import Any
+from typing import Any, Literal
 
 import jax
 import numpy as np
@@ -24,6 +24,31 @@ from sim2real.common import config as config_lib
 from sim2real.algos.base import DRConfig
 from sim2real.envs import make
 from sim2real.rl.ppo import PPOConfig
+
+
+@dataclasses.dataclass(frozen=True)
+class TestConfig:
+    """Test physics on which the driver evaluates every seed's deterministic policy while it trains
+    (``test.csv``, ``test.npz`` in the run folder): out-of-distribution curves in the same run.
+
+    Attributes:
+      every: chunks between evaluations (0: none). The policy is evaluated before the first chunk,
+        before every ``every``-th chunk after it, and after the last chunk.
+      params: names of the physics parameters the points set (the others at the env's defaults).
+      points: one test context per entry, its values in ``params``' order and units.
+      episodes: full episodes per context and seed.
+      seed: PRNG seed of the episodes' initial states (the same at every evaluation).
+      out_of_bounds: a point outside a parameter's physical bounds is refused before the run starts
+        (``refuse``) or simulated at the nearest bound (``clip``: a test range that reaches past
+        the bounds, as the LSDR paper's does).
+    """
+
+    every: int = 0
+    params: tuple[str, ...] = ()
+    points: tuple[tuple[float, ...], ...] = ()
+    episodes: int = 1
+    seed: int = 7
+    out_of_bounds: Literal["refuse", "clip"] = "refuse"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -54,6 +79,7 @@ class TrainConfig:
       progress: draw a progress bar.
       ppo: PPO settings.
       dr: domain-randomisation box.
+      test: physics the policy is evaluated on while it trains (``TestConfig``; off by default).
       algo_options: algorithm-specific settings (see the algorithm's config class).
     """
 
@@ -75,6 +101,7 @@ class TrainConfig:
     progress: bool = True
     ppo: PPOConfig = PPOConfig()
     dr: DRConfig = DRConfig()
+    test: TestConfig = TestConfig()
     algo_options: dict[str, Any] = dataclasses.field(default_factory=dict)
 
     @property
@@ -89,7 +116,7 @@ def build_algo(cfg: TrainConfig, env):
 
     algo = registry.build(cfg.algo, env, cfg)
     if algo.warm_start_from:
-        algo.start_from(*_warm_start(algo.warm_start_from, algo, cfg.num_seeds))
+        algo.start_from(*_warm_start(algo.warm_start_from, algo, cfg.num_seeds), cfg.num_seeds)
     return algo
 
 
@@ -221,6 +248,69 @@ class MetricsLogger:
     def close(self):
         if self.tb is not None:
             self.tb.close()
+
+
+def test_physics(test: TestConfig, env) -> np.ndarray:
+    """The test contexts ``[N, P]`` of ``test`` (checked: names, lengths, bounds, before any write)."""
+    from sim2real.common.config import ConfigError
+
+    if test.every < 0 or test.episodes < 1:
+        raise ConfigError(f"test.every={test.every}, test.episodes={test.episodes}: every >= 0 (0: no "
+                          "test), episodes >= 1")
+    if not test.points:
+        raise ConfigError("test.every > 0 needs test.params and test.points (one list of values per context)")
+    idx = env.spec.indices(list(test.params))  # an unknown name lists the known ones
+    zs = np.tile(env.default_z(), (len(test.points), 1))
+    for k, point in enumerate(test.points):
+        if len(point) != len(test.params):
+            raise ConfigError(f"test.points[{k}] has {len(point)} values for {len(test.params)} test.params "
+                              f"({', '.join(test.params)})")
+        zs[k, idx] = point
+    if test.out_of_bounds == "clip":
+        return np.clip(zs, env.spec.low, env.spec.high).astype(np.float32)
+    env.spec.validate(zs, where="test.points (test.out_of_bounds=clip simulates the nearest bound)")
+    return zs.astype(np.float32)
+
+
+class TestLog:
+    """``test.csv`` (one row per evaluation and seed: mean return over the test contexts) and
+    ``test.npz`` (``returns [E, S, N]``, ``chunk [E]`` = chunks done when evaluated, ``env_steps [E]``
+    per seed, ``z [N, P]``, ``params``, ``points [N, D]``). A resumed run drops what was logged at or
+    after the checkpoint it resumes from (the interrupted tail), like ``MetricsLogger``."""
+
+    def __init__(self, run: Run, cfg: TrainConfig, zs: np.ndarray, resume_from_chunk: int):
+        self.cfg, self.zs = cfg, zs
+        self.csv_path = os.path.join(run.dir, "test.csv")
+        self.npz_path = os.path.join(run.dir, "test.npz")
+        self.returns, self.chunks, self.steps = [], [], []
+        if resume_from_chunk and os.path.exists(self.npz_path):
+            with np.load(self.npz_path) as f:
+                keep = f["chunk"] < resume_from_chunk
+                self.returns, self.chunks, self.steps = list(f["returns"][keep]), list(f["chunk"][keep]), list(f["env_steps"][keep])
+        self._save()
+
+    def write(self, chunks_done: int, env_steps: int, returns: np.ndarray) -> None:
+        """``returns [S, N]``: every seed's mean episode return on every test context."""
+        self.returns.append(np.asarray(returns, np.float32))
+        self.chunks.append(chunks_done)
+        self.steps.append(env_steps)
+        self._save()
+
+    def _save(self) -> None:
+        t = self.cfg.test
+        S, N = self.cfg.num_seeds, len(self.zs)
+        returns = np.stack(self.returns) if self.returns else np.zeros((0, S, N), np.float32)
+        tmp = self.npz_path + ".tmp.npz"
+        np.savez(tmp, returns=returns, chunk=np.asarray(self.chunks, np.int64),
+                 env_steps=np.asarray(self.steps, np.int64), z=self.zs, params=np.asarray(t.params),
+                 points=np.asarray(t.points, np.float64).reshape(N, len(t.params)))
+        os.replace(tmp, self.npz_path)
+        with open(self.csv_path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["chunk", "env_steps", "seed", "test_return"])
+            for r, c, n in zip(self.returns, self.chunks, self.steps):
+                for s in range(S):
+                    w.writerow([int(c), int(n), s, f"{float(np.mean(r[s])):.6g}"])
 
 
 class Progress:
