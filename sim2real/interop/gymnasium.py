@@ -1,0 +1,155 @@
+"""A sim2real env as a Gymnasium env: the batch stays on the JAX device, numpy at the boundary.
+
+    from sim2real.interop.gymnasium import GymnasiumVectorEnv
+    venv = GymnasiumVectorEnv("pendulum", num_envs=64, physics={"mass:pole": (0.5, 2.0)})
+    obs, info = venv.reset(seed=0)                  # obs [64, O] float32 numpy
+    obs, reward, terminated, truncated, info = venv.step(actions)   # actions [64, nu]
+
+* Physics: ``physics={name: (low, high)}`` draws each env's physics uniformly from that box (the
+  others at the env's defaults) at **every** reset, inside the jitted step (``envs/autoreset.py``),
+  so SB3 / CleanRL code trains under domain randomisation unchanged; ``info["z"]`` holds the
+  physics ``[N, P]`` of the step (names: ``venv.physics_names``).
+* Actions are in actuator ctrl units (``action_space`` is the actuators' ctrlrange; the env clips
+  to it), observations float32, unbounded.
+* Auto-reset is Gymnasium's ``SAME_STEP`` mode: a finished env returns its first observation of
+  the next episode; the last one is ``info["final_obs"]`` where ``info["_final_obs"]`` is true.
+* ``reset(seed=s)`` is reproducible (the JAX key is ``s``); steps draw from the env's own key.
+
+``GymnasiumEnv`` is the single-env view (what ``gymnasium.utils.env_checker.check_env`` checks).
+"""
+from __future__ import annotations
+
+try:
+    import gymnasium
+    from gymnasium import spaces
+    from gymnasium.vector import AutoresetMode
+except ImportError as e:  # an optional dependency: say how to get it
+    raise ImportError("sim2real.interop.gymnasium needs gymnasium (pip install 'gymnasium>=1.0')") from e
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from sim2real.envs import Env, make
+from sim2real.envs.autoreset import step_autoreset
+
+
+def _env(env: Env | str, **env_options) -> Env:
+    return make(env, **env_options) if isinstance(env, str) else env
+
+
+def _sampler(env: Env, physics: dict | None):
+    """``sample(key) -> z [P]``: ``physics={name: (low, high)}`` uniform, the rest at the defaults."""
+    base = jnp.asarray(env.default_z())
+    if not physics:
+        return lambda key: base
+    names = list(physics)
+    idx = env.spec.indices(names)  # an unknown name lists the known ones
+    lo, hi = (np.array([float(physics[n][i]) for n in names], np.float32) for i in (0, 1))
+    for n, a, b in zip(names, lo, hi):
+        if not a <= b:
+            raise ValueError(f"physics['{n}'] = ({a}, {b}): low must not exceed high")
+    box = np.tile(env.default_z(), (2, 1))
+    box[0, idx], box[1, idx] = lo, hi
+    env.check_z(box)  # both corners inside the physical bounds
+    return lambda key: base.at[idx].set(jax.random.uniform(key, (len(idx),), minval=lo, maxval=hi))
+
+
+def _spaces(env: Env):
+    obs = spaces.Box(-np.inf, np.inf, (env.obs_size,), np.float32)
+    act = spaces.Box(env.ctrl_low, env.ctrl_high, (env.action_size,), np.float32)
+    return obs, act
+
+
+class GymnasiumVectorEnv(gymnasium.vector.VectorEnv):
+    """``num_envs`` copies of ``env`` (a name or an ``Env``) as one ``gymnasium.vector.VectorEnv``."""
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}
+
+    def __init__(self, env: Env | str, num_envs: int, physics: dict | None = None, **env_options):
+        if int(num_envs) < 1:
+            raise ValueError(f"num_envs={num_envs}: must be a positive integer")
+        self.env = _env(env, **env_options)
+        self.num_envs = int(num_envs)
+        self.single_observation_space, self.single_action_space = _spaces(self.env)
+        self.observation_space = gymnasium.vector.utils.batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = gymnasium.vector.utils.batch_space(self.single_action_space, self.num_envs)
+        self.physics_names = list(self.env.spec.names)
+        sample = _sampler(self.env, physics)
+        env_ = self.env
+
+        def reset(key):
+            k_z, k_s = jax.random.split(key)
+            z = jax.vmap(sample)(jax.random.split(k_z, self.num_envs))
+            return jax.vmap(env_.reset)(jax.random.split(k_s, self.num_envs), z), z
+
+        def step(state, z, action, key):
+            keys = jax.random.split(key, self.num_envs)
+            st, z2, tr, done = jax.vmap(lambda s, zz, a, k: step_autoreset(env_, s, zz, a, k, sample))(
+                state, z, action, keys)
+            return st, z2, tr, done
+
+        self._reset, self._step = jax.jit(reset), jax.jit(step)
+        self._state = self._z = None
+        self._key = jax.random.PRNGKey(0)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        if seed is not None:
+            self._key = jax.random.PRNGKey(int(seed))
+        self._key, k = jax.random.split(self._key)
+        self._state, self._z = self._reset(k)
+        return np.asarray(self._state.obs, np.float32), {"z": np.asarray(self._z)}
+
+    def step(self, actions):
+        if self._state is None:
+            raise RuntimeError("call reset() before step()")
+        a = np.asarray(actions, np.float32).reshape(self.num_envs, -1)
+        if a.shape[1] != self.env.action_size or not np.isfinite(a).all():
+            raise ValueError(f"actions: expected finite [{self.num_envs}, {self.env.action_size}], got "
+                             f"{np.shape(actions)}" + ("" if np.isfinite(a).all() else " with NaN/inf"))
+        self._key, k = jax.random.split(self._key)
+        z = self._z
+        self._state, self._z, tr, done = self._step(self._state, z, jnp.asarray(a), k)
+        done = np.asarray(done)
+        info = {"z": np.asarray(z), "final_obs": np.asarray(tr.next_obs, np.float32), "_final_obs": done}
+        return (np.asarray(self._state.obs, np.float32), np.asarray(tr.reward, np.float64),
+                np.asarray(tr.terminated), np.asarray(tr.truncated), info)
+
+
+class GymnasiumEnv(gymnasium.Env):
+    """One env (a name or an ``Env``) as a ``gymnasium.Env``; ``physics`` as for the vector env.
+    The caller resets after an episode ends, as Gymnasium expects."""
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, env: Env | str, physics: dict | None = None, **env_options):
+        self.env = _env(env, **env_options)
+        self.observation_space, self.action_space = _spaces(self.env)
+        sample = _sampler(self.env, physics)
+        env_ = self.env
+
+        def reset(key):
+            k_z, k_s = jax.random.split(key)
+            z = sample(k_z)
+            return env_.reset(k_s, z), z
+
+        self._reset, self._step = jax.jit(reset), jax.jit(env_.step)
+        self._state = self._z = None
+        self._key = jax.random.PRNGKey(0)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        if seed is not None:
+            self._key = jax.random.PRNGKey(int(seed))
+        self._key, k = jax.random.split(self._key)
+        self._state, self._z = self._reset(k)
+        return np.asarray(self._state.obs, np.float32), {"z": np.asarray(self._z)}
+
+    def step(self, action):
+        if self._state is None:
+            raise RuntimeError("call reset() before step()")
+        a = np.asarray(action, np.float32).reshape(self.env.action_size)
+        self._state = self._step(self._state, jnp.asarray(a), self._z)
+        s = self._state
+        info = {k: float(v) for k, v in s.metrics.items()}
+        return (np.asarray(s.obs, np.float32), float(s.reward), bool(s.terminated), bool(s.truncated), info)
