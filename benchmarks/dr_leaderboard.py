@@ -55,7 +55,10 @@ METHODS = {
 class Settings:
     """task: a key of TASKS; methods: comma-separated keys of METHODS; seeds: per method (5 where a
     ranking is claimed); scale: multiplies the task's env-step budget; threshold: return a cell
-    counts as solved at (default: the task's); out: results root; work: run folders (replaced)."""
+    counts as solved at (default: the task's); out: results root; work: run folders (replaced);
+    merge_from: ``returns.npz`` files of earlier calls (same task, seeds and budget) whose methods
+    join this table (a leaderboard trained over several device calls; ``methods=`` may then be
+    empty)."""
     task: str = "pendulum"
     methods: str = "fixed,udr,udr_context,lsdr,epopt"
     seeds: int = 5
@@ -63,6 +66,7 @@ class Settings:
     threshold: float | None = None
     out: str = os.path.join(HERE, "results", "dr_leaderboard")
     work: str = "/tmp/dr_leaderboard_runs"
+    merge_from: tuple[str, ...] = ()
 
 
 def grid_points(task: dict) -> tuple[list[str], np.ndarray, np.ndarray]:
@@ -124,7 +128,8 @@ def main(args: Settings) -> dict:
 
     if args.task not in TASKS:
         raise SystemExit(f"task={args.task}: one of {', '.join(TASKS)}")
-    unknown = [m for m in args.methods.split(",") if m not in METHODS]
+    methods = [m for m in args.methods.split(",") if m]
+    unknown = [m for m in methods if m not in METHODS]
     if unknown:
         raise SystemExit(f"methods: unknown {unknown}; known: {', '.join(METHODS)}")
     task = TASKS[args.task]
@@ -133,14 +138,21 @@ def main(args: Settings) -> dict:
     out = os.path.join(args.out, args.task)
     os.makedirs(out, exist_ok=True)
     results, seconds = {}, {}
-    for method in args.methods.split(","):
+    for path in args.merge_from:
+        with np.load(path) as f:
+            if not np.array_equal(f["points"], points):
+                raise SystemExit(f"merge_from {path}: another grid than task={args.task}'s")
+            seconds.update(json.loads(str(f["seconds"])))
+            results.update({m: f[m] for m in json.loads(str(f["methods"]))})
+    for method in methods:
         t0 = time.time()
         results[method] = train_method(method, task, args, names, points)
         seconds[method] = round(time.time() - t0, 1)
         print(f"{method}: mean return {results[method].mean():.1f} over {len(points)} cells x {args.seeds} seeds "
               f"({seconds[method]:.0f} s)", flush=True)
     stats = {m: leaderboard.grid_stats(r, in_box, threshold) for m, r in results.items()}
-    np.savez(os.path.join(out, "returns.npz"), points=points, names=np.array(names), in_box=in_box, **results)
+    np.savez(os.path.join(out, "returns.npz"), points=points, names=np.array(names), in_box=in_box,
+             methods=json.dumps(list(results)), seconds=json.dumps(seconds), **results)
     device = f"{jax.devices()[0].device_kind} ({jax.default_backend()})"
     budget = int(task["steps"] * args.scale)
     grid = " x ".join(f"{n} {len(task['grid'][n])} values [{task['grid'][n][0]:g}, {task['grid'][n][-1]:g}]"
