@@ -137,12 +137,13 @@ def main(args: Settings) -> dict:
     names, points, in_box = grid_points(task)
     out = os.path.join(args.out, args.task)
     os.makedirs(out, exist_ok=True)
-    results, seconds = {}, {}
+    results, seconds, devices = {}, {}, set()
     for path in args.merge_from:
         with np.load(path) as f:
             if not np.array_equal(f["points"], points):
                 raise SystemExit(f"merge_from {path}: another grid than task={args.task}'s")
             seconds.update(json.loads(str(f["seconds"])))
+            devices.add(str(f["device"]))
             results.update({m: f[m] for m in json.loads(str(f["methods"]))})
     for method in methods:
         t0 = time.time()
@@ -151,9 +152,11 @@ def main(args: Settings) -> dict:
         print(f"{method}: mean return {results[method].mean():.1f} over {len(points)} cells x {args.seeds} seeds "
               f"({seconds[method]:.0f} s)", flush=True)
     stats = {m: leaderboard.grid_stats(r, in_box, threshold) for m, r in results.items()}
+    if methods or not devices:
+        devices.add(f"{jax.devices()[0].device_kind} ({jax.default_backend()})")
+    device = " and ".join(sorted(devices))
     np.savez(os.path.join(out, "returns.npz"), points=points, names=np.array(names), in_box=in_box,
-             methods=json.dumps(list(results)), seconds=json.dumps(seconds), **results)
-    device = f"{jax.devices()[0].device_kind} ({jax.default_backend()})"
+             methods=json.dumps(list(results)), seconds=json.dumps(seconds), device=device, **results)
     budget = int(task["steps"] * args.scale)
     grid = " x ".join(f"{n} {len(task['grid'][n])} values [{task['grid'][n][0]:g}, {task['grid'][n][-1]:g}]"
                       for n in names)

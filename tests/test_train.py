@@ -239,3 +239,12 @@ def test_lsdr_warm_start_continues_a_trained_policy_with_a_fresh_optimiser(tmp_p
     with pytest.raises(ValueError, match="ppo.net"):
         build_algo(tiny(tmp_path, "name=c", "algo=fixed_dr", *box, f"algo_options.warm_start={tmp_path / 'a'}"),
                    make("pendulum"))
+
+
+def test_a_run_made_with_overwrite_resumes_from_the_command_line(tmp_path):
+    from sim2real.training.driver import config_from_args
+
+    train(tiny(tmp_path, "name=o", "overwrite=true", "max_chunks=1"))
+    cfg = config_from_args([f"out_dir={tmp_path}", "name=o", "resume=true", "max_chunks=0"])
+    assert cfg.resume and not cfg.overwrite
+    assert train(cfg)["finished"]

@@ -139,6 +139,8 @@ def config_from_args(argv: list[str]) -> TrainConfig:
     if bad:
         raise config_lib.ConfigError(f"resume=true continues the run with its saved config ({saved}); only "
                                      f"{', '.join(allowed)} may change, not {', '.join(bad)}")
+    # (a run created with overwrite=true is continued, not replaced: the saved flag does not carry over)
+    overrides = {"overwrite": False, **overrides}
     return config_lib.load(TrainConfig, [f"config={saved}"] + [f"{k}={v if not isinstance(v, bool) else str(v).lower()}"
                                                               for k, v in overrides.items()])
 
