@@ -61,6 +61,27 @@ def _spaces(env: Env):
     return obs, act
 
 
+def _restart(adapter, seed: int | None):
+    """Reset ``adapter`` (either class below): the JAX key from ``seed`` when given, else the next
+    one; returns Gymnasium's ``(obs, info)``."""
+    if seed is not None:
+        adapter._key = jax.random.PRNGKey(int(seed))
+    adapter._key, k = jax.random.split(adapter._key)
+    adapter._state, adapter._z = adapter._reset(k)
+    return np.asarray(adapter._state.obs, np.float32), {"z": np.asarray(adapter._z)}
+
+
+def _actions(adapter, actions, shape: tuple[int, ...]) -> jax.Array:
+    """Actions as a float32 array of ``shape``, refused (naming the shapes) when off or not finite."""
+    if adapter._state is None:
+        raise RuntimeError("call reset() before step()")
+    a = np.asarray(actions, np.float32)
+    if a.size != int(np.prod(shape)) or not np.isfinite(a).all():
+        raise ValueError(f"actions: expected finite {list(shape)}, got {list(np.shape(actions))}"
+                         + ("" if np.isfinite(a).all() else " with NaN/inf"))
+    return jnp.asarray(a.reshape(shape))
+
+
 class GymnasiumVectorEnv(gymnasium.vector.VectorEnv):
     """``num_envs`` copies of ``env`` (a name or an ``Env``) as one ``gymnasium.vector.VectorEnv``."""
 
@@ -94,22 +115,13 @@ class GymnasiumVectorEnv(gymnasium.vector.VectorEnv):
         self._key = jax.random.PRNGKey(0)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        if seed is not None:
-            self._key = jax.random.PRNGKey(int(seed))
-        self._key, k = jax.random.split(self._key)
-        self._state, self._z = self._reset(k)
-        return np.asarray(self._state.obs, np.float32), {"z": np.asarray(self._z)}
+        return _restart(self, seed)
 
     def step(self, actions):
-        if self._state is None:
-            raise RuntimeError("call reset() before step()")
-        a = np.asarray(actions, np.float32).reshape(self.num_envs, -1)
-        if a.shape[1] != self.env.action_size or not np.isfinite(a).all():
-            raise ValueError(f"actions: expected finite [{self.num_envs}, {self.env.action_size}], got "
-                             f"{np.shape(actions)}" + ("" if np.isfinite(a).all() else " with NaN/inf"))
+        a = _actions(self, actions, (self.num_envs, self.env.action_size))
         self._key, k = jax.random.split(self._key)
         z = self._z
-        self._state, self._z, tr, done = self._step(self._state, z, jnp.asarray(a), k)
+        self._state, self._z, tr, done = self._step(self._state, z, a, k)
         done = np.asarray(done)
         info = {"z": np.asarray(z), "final_obs": np.asarray(tr.next_obs, np.float32), "_final_obs": done}
         return (np.asarray(self._state.obs, np.float32), np.asarray(tr.reward, np.float64),
@@ -139,17 +151,10 @@ class GymnasiumEnv(gymnasium.Env):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        if seed is not None:
-            self._key = jax.random.PRNGKey(int(seed))
-        self._key, k = jax.random.split(self._key)
-        self._state, self._z = self._reset(k)
-        return np.asarray(self._state.obs, np.float32), {"z": np.asarray(self._z)}
+        return _restart(self, seed)
 
     def step(self, action):
-        if self._state is None:
-            raise RuntimeError("call reset() before step()")
-        a = np.asarray(action, np.float32).reshape(self.env.action_size)
-        self._state = self._step(self._state, jnp.asarray(a), self._z)
+        self._state = self._step(self._state, _actions(self, action, (self.env.action_size,)), self._z)
         s = self._state
         info = {k: float(v) for k, v in s.metrics.items()}
         return (np.asarray(s.obs, np.float32), float(s.reward), bool(s.terminated), bool(s.truncated), info)
