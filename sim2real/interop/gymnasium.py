@@ -6,8 +6,9 @@
     obs, reward, terminated, truncated, info = venv.step(actions)   # actions [64, nu]
 
 * Physics: ``physics={name: (low, high)}`` draws each env's physics uniformly from that box (the
-  others at the env's defaults) at **every** reset, inside the jitted step (``envs/autoreset.py``),
-  so SB3 / CleanRL code trains under domain randomisation unchanged; ``info["z"]`` holds the
+  others at the env's defaults; checked like a training config's ``dr`` box: low < high, inside
+  the physical bounds) at **every** reset, inside the jitted step (``envs/autoreset.py``),
+  in the form SB3 / CleanRL code consumes (not run with them here); ``info["z"]`` holds the
   physics ``[N, P]`` of the step (names: ``venv.physics_names``).
 * Actions are in actuator ctrl units (``action_space`` is the actuators' ctrlrange; the env clips
   to it), observations float32, unbounded.
@@ -30,6 +31,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from sim2real.algos.base import DRConfig, DRSpace
+from sim2real.dists import uniform
 from sim2real.envs import Env, make
 from sim2real.envs.autoreset import step_autoreset
 
@@ -39,20 +42,15 @@ def _env(env: Env | str, **env_options) -> Env:
 
 
 def _sampler(env: Env, physics: dict | None):
-    """``sample(key) -> z [P]``: ``physics={name: (low, high)}`` uniform, the rest at the defaults."""
-    base = jnp.asarray(env.default_z())
-    if not physics:
+    """``sample(key) -> z [P]``: ``physics={name: (low, high)}`` uniform, the rest at the defaults;
+    the box is checked by the rule every DR box follows (``algos.base.DRSpace``)."""
+    space = DRSpace(env, DRConfig(params=tuple(physics or ()), low=tuple(float(v[0]) for v in (physics or {}).values()),
+                                  high=tuple(float(v[1]) for v in (physics or {}).values())))
+    if not len(space):
+        base = jnp.asarray(space.base)
         return lambda key: base
-    names = list(physics)
-    idx = env.spec.indices(names)  # an unknown name lists the known ones
-    lo, hi = (np.array([float(physics[n][i]) for n in names], np.float32) for i in (0, 1))
-    for n, a, b in zip(names, lo, hi):
-        if not a <= b:
-            raise ValueError(f"physics['{n}'] = ({a}, {b}): low must not exceed high")
-    box = np.tile(env.default_z(), (2, 1))
-    box[0, idx], box[1, idx] = lo, hi
-    env.check_z(box)  # both corners inside the physical bounds
-    return lambda key: base.at[idx].set(jax.random.uniform(key, (len(idx),), minval=lo, maxval=hi))
+    box = uniform.make(space.low, space.high)
+    return lambda key: space.expand(uniform.sample(key, box))
 
 
 def _spaces(env: Env):

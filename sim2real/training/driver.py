@@ -228,6 +228,7 @@ def train(cfg: TrainConfig, on_chunk=None) -> dict:
 
     def test(chunks_done):
         tests.write(chunks_done, chunks_done * cfg.updates_per_chunk * per_update, np.asarray(tester(state)))
+
     end = n_chunks if not cfg.max_chunks else min(n_chunks, start + cfg.max_chunks)
     bar = Progress(cfg, total=n_chunks * cfg.updates_per_chunk * per_update,
                    done=start * cfg.updates_per_chunk * per_update)
