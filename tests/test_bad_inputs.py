@@ -292,3 +292,47 @@ def test_sigterm_during_a_diagnosis_leaves_nothing_behind(tmp_path):
     assert p.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
     assert os.listdir(tmp_path) == []
+
+
+_STUCK_TOOL = r"""
+import sys, time
+from sim2real.common import cli, output
+cli.TERM_GRACE_S = 0.5
+
+def job(argv):
+    with output.staged(argv[0], kind="diagnosis") as tmp:
+        open(tmp + "/half.txt", "w").write("half")
+        end = time.time() + float(argv[1])
+        told = False
+        while True:  # a library that swallows the interrupt (or a hung C++ call)
+            try:
+                if not told:
+                    told = print("staged", flush=True) or True
+                if time.time() > end:
+                    break
+                time.sleep(0.05)
+            except KeyboardInterrupt:
+                pass
+
+cli.main_guard(job, sys.argv[1:])
+"""
+
+
+@pytest.mark.parametrize("stuck_s", [30.0, 0.2], ids=["never-unwinds", "swallowed-then-finishes"])
+def test_sigterm_that_is_swallowed_still_leaves_nothing_behind(tmp_path, stuck_s):
+    """SIGTERM lands where it is swallowed: a tool stuck past the grace period is ended by the
+    watchdog (staging folder removed, status 130); one that finishes its block afterwards does not
+    move the result into place."""
+    import signal
+    import subprocess
+    import sys
+
+    out = tmp_path / "res"
+    p = subprocess.Popen([sys.executable, "-c", _STUCK_TOOL, str(out), str(stuck_s)], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    assert p.stdout.readline().strip() == "staged"
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=20)
+    assert p.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    assert os.listdir(tmp_path) == []

@@ -57,11 +57,48 @@ def stop_on_signal():
 
 
 _TERMINATED = False
+# Seconds a SIGTERM'd tool has to unwind before it is ended from a watchdog thread. A Python signal
+# handler runs only between bytecodes: a long XLA compile or jitted call delays it, and an
+# interrupt raised inside a library's callback or lock can be swallowed or leave the interpreter
+# hung at exit. A scheduler sends SIGKILL after its own grace period (Slurm: 30 s), which would
+# leave partial output behind; the watchdog removes it first (``on_forced_exit``).
+TERM_GRACE_S = 10.0
+_FORCED_EXIT_CLEANUPS: list = []
+_WATCHDOG: list = []
+
+
+@contextlib.contextmanager
+def on_forced_exit(fn):
+    """While the block runs, ``fn()`` is called if a SIGTERM'd tool is ended by the watchdog
+    (the only clean-up that then runs: remove a staging folder, say)."""
+    _FORCED_EXIT_CLEANUPS.append(fn)
+    try:
+        yield
+    finally:
+        _FORCED_EXIT_CLEANUPS.remove(fn)
+
+
+def _force_exit_after(grace_s: float) -> None:
+    import os
+    import time
+
+    time.sleep(grace_s)
+    for fn in list(_FORCED_EXIT_CLEANUPS):
+        try:
+            fn()
+        except Exception:  # noqa: BLE001 -- exiting anyway; one failed clean-up must not stop the rest
+            pass
+    sys.stderr.write(f"interrupted; did not unwind within {grace_s:g} s of SIGTERM, partial output removed\n")
+    sys.stderr.flush()
+    os._exit(INTERRUPTED)
 
 
 def _terminate_as_interrupt(signum, frame):
     global _TERMINATED
     _TERMINATED = True
+    if not _WATCHDOG:
+        _WATCHDOG.append(threading.Thread(target=_force_exit_after, args=(TERM_GRACE_S,), daemon=True))
+        _WATCHDOG[0].start()
     raise KeyboardInterrupt
 
 

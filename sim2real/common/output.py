@@ -20,6 +20,8 @@ import shutil
 import tempfile
 import time
 
+from sim2real.common.cli import on_forced_exit, raise_if_terminated
+
 MARKER = ".sim2real"
 
 
@@ -121,12 +123,23 @@ def staged(path: str, kind: str, inputs=(), overwrite: bool = False, key: str = 
     except OSError as e:
         raise OutputError(f"{key}={path}: cannot create its parent folder ({e.strerror})") from None
     tmp = tempfile.mkdtemp(prefix=f".{os.path.basename(p)}.partial-", dir=parent)
+
+    def discard():
+        shutil.rmtree(tmp, ignore_errors=True)
+        for folder in made:  # deepest first
+            try:
+                os.rmdir(folder)
+            except OSError:
+                break
+
     try:
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the result is an ordinary folder
         write_marker(tmp, kind)
-        yield tmp
+        with on_forced_exit(discard):
+            yield tmp
+        raise_if_terminated()  # a SIGTERM swallowed during the block: the result never replaces path
         old = None
         if os.path.isdir(p) and os.listdir(p):
             check(path, kind, inputs, overwrite, key=key)  # still ours (nothing changed meanwhile)
@@ -144,10 +157,5 @@ def staged(path: str, kind: str, inputs=(), overwrite: bool = False, key: str = 
         if old is not None:
             shutil.rmtree(old)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        for folder in made:  # deepest first
-            try:
-                os.rmdir(folder)
-            except OSError:
-                break
+        discard()
         raise
