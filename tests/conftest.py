@@ -19,6 +19,11 @@ import sim2real  # noqa: E402,F401
 from sim2real.envs import make  # noqa: E402
 
 
+# the learned-randomisation toy: 2 Nm hold a light pole upright but not a heavy one (ADR, DORAEMON)
+BALANCE = ["env=pendulum_balance", "ppo.num_envs=64", "ppo.num_steps=64", "ppo.gamma=0.98", "ppo.lr=1e-3",
+           "ppo.reward_scale=0.1", "ppo.net.hidden=[64,64]", "dr.params=[mass:pole]", "dr.low=[0.2]", "dr.high=[3.0]"]
+
+
 @functools.lru_cache(maxsize=None)
 def env_for(name: str):
     return make(name)

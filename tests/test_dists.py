@@ -77,3 +77,24 @@ def test_distributions_are_differentiable_pytrees():
     assert np.isfinite(np.asarray(g.mean)).all() and np.abs(np.asarray(g.mean)).sum() > 0
     batched = jax.vmap(lambda m: dists.entropy(gaussian.make(m, std=[1.0, 2.0])))(jnp.zeros((3, 2)))
     assert batched.shape == (3,)
+
+
+def test_beta_matches_scipy_and_its_own_samples():
+    import scipy.stats as st
+
+    from sim2real.dists import beta
+
+    p, q = beta.make([2.0, 0.7], [3.0, 1.5]), beta.make([1.0, 1.2], [1.0, 4.0])
+    ref = [st.beta(2, 3), st.beta(0.7, 1.5)]
+    np.testing.assert_allclose(float(dists.entropy(p)), sum(r.entropy() for r in ref), rtol=1e-5)
+    np.testing.assert_allclose(float(dists.log_prob(p, np.array([0.3, 0.6]))),
+                               ref[0].logpdf(0.3) + ref[1].logpdf(0.6), rtol=1e-5)
+    xs = np.asarray(dists.sample(jax.random.PRNGKey(0), p, 200_000))
+    mc = np.mean(np.asarray(beta.log_prob(p, xs) - beta.log_prob(q, xs)))
+    np.testing.assert_allclose(float(dists.kl(p, q)), mc, atol=0.01)
+    u = np.random.default_rng(0).uniform([0.1, 0.2], [0.5, 0.9], (200_000, 2))
+    np.testing.assert_allclose(float(dists.kl_from_uniform([0.1, 0.2], [0.5, 0.9], p)),
+                               np.mean(-np.log(0.4 * 0.7) - np.asarray(beta.log_prob(p, u))), atol=0.01)
+    m = beta.from_moments([0.3, 0.5], [0.01, 0.02])
+    np.testing.assert_allclose(beta.mean(m), [0.3, 0.5], rtol=1e-5)
+    np.testing.assert_allclose(beta.var(m), [0.01, 0.02], rtol=1e-4)

@@ -71,6 +71,22 @@ class DRSpace:
     def names(self) -> tuple[str, ...]:
         return self.sub.names
 
+    def start_box(self, init_low=(), init_high=(), key: str = "algo_options.init_low/init_high"):
+        """``(low [K], high [K])`` where a learned distribution starts inside this (limit) box: the
+        given box, or the env's nominal value of each parameter (a point, clipped into the box)."""
+        if not len(init_low) and not len(init_high):
+            nominal = np.asarray([self.env.spec[n].default for n in self.names], np.float32)
+            nominal = np.clip(nominal, self.low, self.high)
+            return nominal, nominal.copy()
+        lo, hi = np.asarray(init_low, np.float32), np.asarray(init_high, np.float32)
+        if lo.shape != (len(self),) or hi.shape != (len(self),):
+            raise ValueError(f"{key}: one value per dr.params entry ({len(self)}), got {len(lo)} and {len(hi)}")
+        for n, a, b, la, lb in zip(self.names, lo, hi, self.low, self.high):
+            if not (la <= a <= b <= lb):
+                raise ValueError(f"{key} for '{n}': [{a:g}, {b:g}] must be an ordered box inside the limit box "
+                                 f"dr.low..dr.high [{la:g}, {lb:g}]")
+        return lo, hi
+
 
 class OuterLoop:
     """The contract between an outer-loop algorithm and the training driver (``train.py``).

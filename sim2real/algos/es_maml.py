@@ -32,7 +32,7 @@ from flax import struct
 from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.algos.registry import register
 from sim2real.envs.base import Env
-from sim2real.rl.episodes import episodes
+from sim2real.rl.episodes import episodes, with_horizon
 from sim2real.rl import networks, normalize
 from sim2real.rl.ppo import PPO, PPOConfig, PPOState
 from sim2real.rl.rollout import init_runner
@@ -86,8 +86,7 @@ class ESMAML(OuterLoop):
         # the inner loop's step size is part of U and must not decay with the meta-iterations
         self.ppo = PPO(env, dataclasses.replace(ppo_cfg, anneal_lr=False), 1)
         self.horizon = cfg.eval_horizon or env.config.episode_length
-        self.eval_env = env if self.horizon == env.config.episode_length else env.__class__(
-            dataclasses.replace(env.config, episode_length=self.horizon))
+        self.eval_env = with_horizon(env, self.horizon)
         _, template = networks.init_params(jax.random.PRNGKey(0), ppo_cfg.net, env.obs_size, 0, env.action_size)
         self.es = Open_ES(population_size=cfg.population, solution=template, use_antithetic_sampling=True,
                           optimizer=optax.adam(cfg.meta_lr), std_schedule=optax.constant_schedule(cfg.sigma))

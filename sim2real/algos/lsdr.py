@@ -34,7 +34,7 @@ from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.algos.registry import register
 from sim2real.dists import binned, gaussian
 from sim2real.envs.base import Env
-from sim2real.rl.episodes import episodes
+from sim2real.rl.episodes import episodes, with_horizon
 from sim2real.rl import epopt
 from sim2real.rl.ppo import PPO, PPOConfig, PPOState
 from sim2real.rl.rollout import Context
@@ -125,8 +125,7 @@ class LSDR(OuterLoop):
         self.ppo = PPO(env, ppo_cfg, num_updates, ctx)
         self.tx = optax.adam(cfg.lr)
         self.horizon = cfg.eval_horizon or env.config.episode_length
-        self.eval_env = env if self.horizon == env.config.episode_length else env.__class__(
-            dataclasses.replace(env.config, episode_length=self.horizon))
+        self.eval_env = with_horizon(env, self.horizon)
 
     # ---------------------------------------------------------------------- distributions ----
     def init_dist(self):

@@ -2,12 +2,12 @@
 
 ``sample(key, d, n)``, ``log_prob(d, z)``, ``kl(p, q)``, ``entropy(d)`` dispatch on the type of
 ``d``: :class:`~sim2real.dists.uniform.Uniform`, :class:`~sim2real.dists.binned.Binned`,
-:class:`~sim2real.dists.gaussian.Gaussian`. Being pytrees of arrays, they can be differentiated
+:class:`~sim2real.dists.gaussian.Gaussian`, :class:`~sim2real.dists.beta.Beta`. Being pytrees of arrays, they can be differentiated
 (LSDR), vmapped, or updated in closed form (REPS).
 """
-from sim2real.dists import binned, gaussian, uniform
+from sim2real.dists import beta, binned, gaussian, uniform
 
-_MODULES = {uniform.Uniform: uniform, binned.Binned: binned, gaussian.Gaussian: gaussian}
+_MODULES = {uniform.Uniform: uniform, binned.Binned: binned, gaussian.Gaussian: gaussian, beta.Beta: beta}
 
 
 def module_of(d):

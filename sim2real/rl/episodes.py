@@ -6,6 +6,8 @@ recording and the benchmarks use the same code.
 """
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 
@@ -13,6 +15,14 @@ from sim2real.envs.base import Env
 from sim2real.rl import networks, normalize
 from sim2real.rl.ppo import PPO
 from sim2real.rl.rollout import to_ctrl
+
+
+def with_horizon(env: Env, horizon: int) -> Env:
+    """``env`` whose episodes last ``horizon`` steps (``env`` itself when ``horizon`` is 0 or its own
+    length): the outer loops' evaluation episodes may be shorter than the training ones."""
+    if not horizon or horizon == env.config.episode_length:
+        return env
+    return env.__class__(dataclasses.replace(env.config, episode_length=int(horizon)))
 
 
 def action(env: Env, ppo: PPO, params, obs_stats, obs, ctx, carry, first, key, deterministic: bool = True):
