@@ -6,13 +6,15 @@ final policy of every seed scored on a physics grid that reaches outside the tra
 
 Methods (``methods=``, comma-separated): ``fixed`` (nominal physics), ``udr`` (uniform DR, MLP),
 ``udr_lstm`` (uniform DR, LSTM), ``udr_context`` (uniform DR, the true physics as the policy's
-input: an upper bound), ``lsdr`` (learned distribution), ``epopt`` (EPOpt-PPO over the box).
+input: an upper bound), ``lsdr`` (learned distribution), ``epopt`` (EPOpt-PPO over the box),
+``adr`` (automatic DR) and ``doraemon`` (entropy maximisation under a success constraint), the
+last two learning their own box inside a wider limit box (see ``TASKS``).
 Each trains through the driver (``scripts/train.py``'s), seeds vmapped, and the driver's ``test``
 section scores the final policies on the grid (one full episode per cell and seed). Statistics:
 ``sim2real.tools.leaderboard`` (means with 95% seed-bootstrap intervals in / outside the box and
 over all cells, the fraction of cells above ``threshold``, each method against the best).
 Writes ``<out>/<task>/returns.npz`` (``<method>: [S, N]``, ``z``, ``in_box``), ``summary.md`` and
-``leaderboard.png``. ADR and DORAEMON are not in it yet (issue 24).
+``leaderboard.png``. ES-MAML is not in it (it trains through its own benchmark).
 """
 from __future__ import annotations
 
@@ -34,13 +36,21 @@ TASKS = {
         "config": "configs/pendulum.yaml", "steps": 1_500_000, "threshold": -300.0,
         "box": {"mass:pole": (0.7, 1.3), "coulomb:hinge": (0.0, 0.1)},
         "grid": {"mass:pole": np.linspace(0.3, 2.1, 7), "coulomb:hinge": np.linspace(0.0, 0.4, 5)},
+        "limit": {"mass:pole": (0.1, 4.0), "coulomb:hinge": (0.0, 1.0)}, "num_evals": 16,
     },
     "hopper": {  # seed 004's grid (12 x 8) and training box
         "config": "configs/hopper.yaml", "steps": 50_000_000, "threshold": 1000.0,
         "box": {"mass:torso": (1.0, 9.0), "friction": (1.5, 2.5)},
         "grid": {"mass:torso": np.linspace(0.5, 11.5, 12), "friction": np.linspace(0.1, 2.9, 8)},
+        "limit": {"mass:torso": (0.4, 15.0), "friction": (0.05, 4.0)}, "num_evals": 32,
     },
 }
+# ADR and DORAEMON learn where to randomise inside a "limit" box (chosen from the nominal physics
+# -- mass nominal/10 or /8 to 4x, friction up to what the motor or the floor plausibly sees --
+# before any run, not from the grid); both start from the training box of the fixed-box methods.
+# Their thresholds derive from the task's solved-cell threshold by one rule, set before any run:
+# ADR shrinks a bound at or below it and widens it at or above it + |it| / 2; a DORAEMON episode
+# succeeds at or above it, and the success rate must stay >= 0.5.
 METHODS = {
     "fixed": ["algo=udr"],
     "udr": ["algo=udr", "BOX"],
@@ -48,7 +58,26 @@ METHODS = {
     "udr_context": ["algo=udr", "BOX", "ppo.net.use_context=true"],
     "lsdr": ["algo=lsdr", "BOX", "ppo.net.use_context=true"],
     "epopt": ["algo=fixed_dr", "BOX", "algo_options.policy_optimizer=epopt"],
+    "adr": ["algo=adr", "LIMIT", "START", "ADR"],
+    "doraemon": ["algo=doraemon", "LIMIT", "START", "DORAEMON"],
 }
+
+
+def method_args(method: str, task: dict, threshold: float) -> list[str]:
+    """``key=value`` settings of ``method`` on ``task`` (the placeholders of METHODS filled in)."""
+    def box(b):
+        return [f"dr.params=[{','.join(b)}]", f"dr.low={[v[0] for v in b.values()]}",
+                f"dr.high={[v[1] for v in b.values()]}"]
+
+    fill = {
+        "BOX": box(task["box"]), "LIMIT": box(task.get("limit", {})),
+        "START": [f"algo_options.init_low={[v[0] for v in task['box'].values()]}",
+                  f"algo_options.init_high={[v[1] for v in task['box'].values()]}"],
+        "ADR": [f"algo_options.t_low={threshold}", f"algo_options.t_high={threshold + abs(threshold) / 2}",
+                f"algo_options.num_evals={task.get('num_evals', 32)}"],
+        "DORAEMON": [f"algo_options.success_return={threshold}", f"algo_options.num_evals={task.get('num_evals', 32)}"],
+    }
+    return [x for m in METHODS[method] for x in fill.get(m, [m])]
 
 
 @dataclasses.dataclass
@@ -79,15 +108,13 @@ def grid_points(task: dict) -> tuple[list[str], np.ndarray, np.ndarray]:
     return names, points, in_box
 
 
-def train_method(method: str, task: dict, args: Settings, names, points) -> np.ndarray:
+def train_method(method: str, task: dict, args: Settings, names, points, threshold: float) -> np.ndarray:
     """The method's final policies on the grid: ``[S, N]`` returns."""
     from sim2real.common import config as config_lib
     from sim2real.training.driver import train
     from sim2real.training.runs import TestConfig, TrainConfig
 
-    box = [f"dr.params=[{','.join(task['box'])}]", f"dr.low={[v[0] for v in task['box'].values()]}",
-           f"dr.high={[v[1] for v in task['box'].values()]}"]
-    extra = [x for m in METHODS[method] for x in (box if m == "BOX" else [m])]
+    extra = method_args(method, task, threshold)
     cfg = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, task['config'])}", f"name={method}",
                                         f"out_dir={args.work}", "overwrite=true", "progress=false",
                                         "tensorboard=false", f"num_seeds={args.seeds}",
@@ -147,7 +174,7 @@ def main(args: Settings) -> dict:
             results.update({m: f[m] for m in json.loads(str(f["methods"]))})
     for method in methods:
         t0 = time.time()
-        results[method] = train_method(method, task, args, names, points)
+        results[method] = train_method(method, task, args, names, points, threshold)
         seconds[method] = round(time.time() - t0, 1)
         print(f"{method}: mean return {results[method].mean():.1f} over {len(points)} cells x {args.seeds} seeds "
               f"({seconds[method]:.0f} s)", flush=True)
