@@ -30,18 +30,44 @@ def test_intervals_cover_the_mean_and_differences_are_called_significant_only_wh
         leaderboard.grid_stats(np.full((2, 5), np.nan), in_box, 0.0)
 
 
-def test_toy_leaderboard_runs_every_method_through_the_driver(tmp_path):
-    spec = importlib.util.spec_from_file_location("bench_dr_leaderboard", os.path.join(ROOT, "benchmarks", "dr_leaderboard.py"))
+def _load(name):
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", os.path.join(ROOT, "benchmarks", f"{name}.py"))
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod
     spec.loader.exec_module(mod)
+    return mod
+
+
+def test_toy_leaderboard_runs_every_method_through_the_driver(tmp_path):
+    mod = _load("dr_leaderboard")
     from sim2real.common.config import load
 
-    args = load(mod.Settings, ["methods=fixed,udr_context", "seeds=2", "scale=0.002", f"out={tmp_path}",
+    args = load(mod.Settings, ["methods=fixed,udr_context,adr", "seeds=2", "scale=0.002", f"out={tmp_path}",
                                f"work={tmp_path / 'runs'}"])
     res = mod.main(args)
     n = len(mod.grid_points(mod.TASKS["pendulum"])[1])
-    assert set(res["results"]) == {"fixed", "udr_context"} and res["results"]["fixed"].shape == (2, n)
+    assert set(res["results"]) == {"fixed", "udr_context", "adr"} and res["results"]["fixed"].shape == (2, n)
     summary = (tmp_path / "pendulum" / "summary.md").read_text()
-    assert "| fixed |" in summary and "| udr_context |" in summary
+    assert "| fixed |" in summary and "| udr_context |" in summary and "| adr |" in summary
     assert (tmp_path / "pendulum" / "leaderboard.png").exists()
+    # the learned box's evolution, from the ADR run folder
+    plot = _load("dr_learned_plot")
+    png = plot.main(plot.Settings(adr=str(tmp_path / "runs" / "adr"), out=str(tmp_path / "learned.png")))
+    assert os.path.getsize(png) > 0
+
+
+def test_every_leaderboard_method_builds_on_both_tasks():
+    """The placeholders of METHODS (boxes, limit boxes, thresholds) give settings every algorithm
+    accepts, on the pendulum and on hopper (nothing is trained)."""
+    from sim2real.common.config import load
+    from sim2real.envs import make
+    from sim2real.training.driver import TrainConfig, build_algo
+
+    mod = _load("dr_leaderboard")
+    for task_name, task in mod.TASKS.items():
+        env = make(task_name)
+        for method in mod.METHODS:
+            cfg = load(TrainConfig, [f"config={os.path.join(ROOT, task['config'])}", "ppo.num_envs=8",
+                                     "ppo.num_steps=8", "ppo.num_minibatches=2"]
+                       + mod.method_args(method, task, task["threshold"]))
+            assert build_algo(cfg, env).space.names == tuple(task["box"]) or method == "fixed"
