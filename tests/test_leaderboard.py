@@ -42,13 +42,13 @@ def test_toy_leaderboard_runs_every_method_through_the_driver(tmp_path):
     mod = _load("dr_leaderboard")
     from sim2real.common.config import load
 
-    args = load(mod.Settings, ["methods=fixed,udr_context,adr", "seeds=2", "scale=0.002", f"out={tmp_path}",
+    args = load(mod.Settings, ["methods=fixed,adr", "seeds=2", "scale=0.002", f"out={tmp_path}",
                                f"work={tmp_path / 'runs'}"])
     res = mod.main(args)
     n = len(mod.grid_points(mod.TASKS["pendulum"])[1])
-    assert set(res["results"]) == {"fixed", "udr_context", "adr"} and res["results"]["fixed"].shape == (2, n)
+    assert set(res["results"]) == {"fixed", "adr"} and res["results"]["fixed"].shape == (2, n)
     summary = (tmp_path / "pendulum" / "summary.md").read_text()
-    assert "| fixed |" in summary and "| udr_context |" in summary and "| adr |" in summary
+    assert "| fixed |" in summary and "| adr |" in summary
     assert (tmp_path / "pendulum" / "leaderboard.png").exists()
     # the learned box's evolution, from the ADR run folder
     plot = _load("dr_learned_plot")
