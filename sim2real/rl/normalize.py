@@ -21,8 +21,11 @@ def init(size: int) -> RunningStats:
 def update(s: RunningStats, x: jnp.ndarray) -> RunningStats:
     """Merge a batch ``x [..., O]`` into the statistics."""
     x = x.reshape(-1, x.shape[-1])
-    n = x.shape[0]
-    mean, var = x.mean(0), x.var(0)
+    return merge(s, x.mean(0), x.var(0), x.shape[0])
+
+
+def merge(s: RunningStats, mean, var, n) -> RunningStats:
+    """Merge the mean ``[O]`` and variance ``[O]`` of ``n`` new samples into the statistics."""
     total = s.count + n
     delta = mean - s.mean
     new_mean = s.mean + delta * n / total

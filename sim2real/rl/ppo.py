@@ -45,6 +45,9 @@ class PPOConfig:
       net: network shape.
       split_envs: step each rollout's envs on all the host's devices that divide ``num_envs`` (the
         CPU cores: the training driver calls ``parallel.use_cpu_cores()``); learning stays whole.
+      data_parallel: split the envs over those devices for the whole update, learning included:
+        gradients and statistics summed over devices, minibatches stratified by env
+        (``rl/data_parallel.py``; feed-forward policies).
     """
 
     num_envs: int = 64
@@ -65,6 +68,7 @@ class PPOConfig:
     reward_scale: float = 1.0
     net: NetConfig = NetConfig()
     split_envs: bool = False
+    data_parallel: bool = False
 
     @property
     def batch_size(self) -> int:
@@ -97,6 +101,10 @@ def check(cfg: PPOConfig, prefix: str = "ppo.") -> None:
     if cfg.batch_size % cfg.num_minibatches:
         raise ValueError(f"{prefix}num_envs * {prefix}num_steps = {cfg.batch_size} must be divisible by "
                          f"{prefix}num_minibatches={cfg.num_minibatches}")
+    if cfg.data_parallel:
+        from sim2real.rl import data_parallel
+
+        data_parallel.check(cfg)
 
 
 @struct.dataclass
@@ -141,11 +149,20 @@ class PPO:
 
     def update(self, st: PPOState, sample: Callable):
         """One PPO iteration: collect with ``sample`` for resets, then learn. Returns ``(state, metrics)``."""
+        if self.cfg.data_parallel:
+            from sim2real.rl import data_parallel
+
+            st, metrics, ep = data_parallel.update(self, st, sample)
+            return st, self._episode_metrics(metrics, ep)
         key, k_col, k_learn = jax.random.split(st.key, 3)
         runner, batch, ep = collect(self.env, self.net, st.params, st.obs_stats, self.ctx, st.runner, k_col,
                                     sample, self.cfg.num_steps, split=self.cfg.split_envs)
         st = st.replace(runner=runner, key=key)
         st, metrics = self.learn(st, batch, k_learn)
+        return st, self._episode_metrics(metrics, ep)
+
+    @staticmethod
+    def _episode_metrics(metrics, ep):
         # no episode ended in this batch: there is no episode statistic (NaN, not a return of 0)
         ended = ep["episodes"] > 0
         metrics.update(
@@ -153,7 +170,7 @@ class PPO:
             episode_length=jnp.where(ended, ep["length_sum"] / jnp.maximum(ep["episodes"], 1), jnp.nan),
             episodes=ep["episodes"], diverged=ep["diverged"],
         )
-        return st, metrics
+        return metrics
 
     def advantages(self, batch: Batch):
         """GAE advantages and returns ``[T, B]`` of a collected batch (rewards scaled first)."""
@@ -214,14 +231,17 @@ class PPO:
 
         return jax.lax.scan(step, mb.carry0, (mb.obs, mb.ctx, mb.first))[1]
 
-    def _loss(self, params, mb: Batch, adv, ret):
+    def _loss(self, params, mb: Batch, adv, ret, weight_sum=None):
+        """Clipped-surrogate loss of a minibatch. ``weight_sum`` given (data-parallel PPO): the
+        minibatch is one device's part, ``adv`` already standardised over the whole minibatch,
+        and the averages divide by the whole minibatch's weight (summed over devices later)."""
         cfg = self.cfg
         mean, log_std, value = self._forward(params, mb)
         log_prob = networks.gaussian_log_prob(mean, log_std, mb.action)
         ratio = jnp.exp(log_prob - mb.log_prob)
-        w = mb.valid / jnp.maximum(mb.valid.sum(), 1.0)
+        w = mb.valid / (jnp.maximum(mb.valid.sum(), 1.0) if weight_sum is None else weight_sum)
         avg = lambda x: jnp.sum(w * x)
-        if cfg.normalize_adv:
+        if cfg.normalize_adv and weight_sum is None:
             mu = avg(adv)
             adv = (adv - mu) / (jnp.sqrt(avg(jnp.square(adv - mu))) + 1e-8)
         pg = -avg(jnp.minimum(ratio * adv, jnp.clip(ratio, 1 - cfg.clip_eps, 1 + cfg.clip_eps) * adv))

@@ -105,7 +105,7 @@ def init_runner(env: Env, key, num_envs: int, sample: Callable, carry_size: int)
 
 
 def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, key, sample: Callable,
-            num_steps: int, deterministic: bool = False, split: bool = False):
+            num_steps: int, deterministic: bool = False, split: bool = False, step_keys=None):
     """Run ``num_steps`` steps of all envs.
 
     Every env draws from its own key (``[T, B]`` keys from ``key``), so the draws do not depend on
@@ -113,6 +113,9 @@ def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, k
     cores after ``parallel.use_cpu_cores()``) steps its own slice of the envs
     (``parallel.env_slices``); the returned batch is gathered whole for learning and the runner
     stays split for the next call.
+
+    ``step_keys [T, B, 2]``, if given, replaces the keys drawn from ``key`` (a device's slice of
+    the whole batch's keys in data-parallel PPO, ``rl/data_parallel.py``).
 
     Returns ``(runner, batch [T, B], stats)`` with ``stats`` holding the sums over episodes that
     ended in this batch (``return_sum``, ``length_sum``, ``episodes``) and ``diverged`` steps.
@@ -158,7 +161,8 @@ def collect(env: Env, net, params, obs_stats, ctx_fn: Context, runner: Runner, k
         roll = parallel.env_slices(roll, num_envs, in_specs=(parallel.ENVS, parallel.ENVS_OVER_TIME),
                                    out_specs=(parallel.ENVS, parallel.ENVS_OVER_TIME))
     carry0 = runner.carry
-    runner, (batch, ended) = roll(runner, jax.random.split(key, (num_steps, num_envs)))
+    keys = jax.random.split(key, (num_steps, num_envs)) if step_keys is None else step_keys
+    runner, (batch, ended) = roll(runner, keys)
     if split:
         # learning runs on the whole batch on every device (no cross-device reductions in the
         # loss, so the update is the one-device update)

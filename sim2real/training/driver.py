@@ -185,7 +185,7 @@ def train(cfg: TrainConfig, on_chunk=None) -> dict:
     validate(cfg)
     if cfg.resume:
         cfg = resume_config(cfg)
-    if cfg.ppo.split_envs:  # (on a GPU host the CPU device count changes nothing)
+    if cfg.ppo.split_envs or cfg.ppo.data_parallel:  # (on a GPU host the CPU device count changes nothing)
         _use_cpu_cores()
     env = make(cfg.env, **cfg.env_options)
     if not cfg.resume:  # (a resumed run's config.yaml holds the resolved box already)

@@ -1,0 +1,109 @@
+"""Data-parallel PPO: every device steps its slice of the envs and learns on it; gradients,
+advantage and observation statistics are summed over devices, so parameters stay replicated.
+
+One ``jax.shard_map`` over the mesh axis ``"batch"`` (``envs/parallel.py``) runs the whole update:
+the collection (``rl/rollout.collect`` on the device's envs), GAE (per env, no communication),
+and the epochs. What crosses devices, by ``psum``: each minibatch's advantage mean and variance
+and its total weight, the gradient, the observation statistics and the episode statistics.
+
+Minibatches are *stratified by env*: in every epoch each env permutes its own ``T`` steps with a
+key folded from its global index and gives ``T / num_minibatches`` of them to each minibatch. A
+minibatch is therefore the same set of samples whether the envs sit on 1 device or N, and the
+update is the same to float rounding (``tests/test_parallel.py``; it differs from ``PPO.learn``'s
+permutation over all samples, so ``ppo.data_parallel=true`` is a different, equally valid sampling
+of minibatches, not the same numbers as ``false``). Feed-forward policies only (a recurrent
+policy's minibatches are whole env sequences, whose split over devices would vary in size).
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import optax
+from jax.sharding import PartitionSpec
+
+from sim2real.envs import parallel
+from sim2real.rl import normalize
+from sim2real.rl.rollout import collect
+
+AXIS = "batch"
+
+
+def check(cfg) -> None:
+    """Refuse settings data-parallel PPO cannot run, naming the key."""
+    if cfg.net.kind != "mlp":
+        raise ValueError("ppo.data_parallel=true needs ppo.net.kind=mlp (recurrent minibatches are whole env "
+                         "sequences; their split over devices is not implemented)")
+    if cfg.num_steps % cfg.num_minibatches:
+        raise ValueError(f"ppo.data_parallel=true: ppo.num_steps={cfg.num_steps} must be divisible by "
+                         f"ppo.num_minibatches={cfg.num_minibatches} (each env gives every minibatch the same "
+                         "number of its steps)")
+
+
+def _psum(x):
+    return jax.lax.psum(x, AXIS)
+
+
+def update(ppo, st, sample):
+    """``PPO.update`` with the envs split over ``parallel.batch_devices(num_envs)``: ``(state, metrics)``."""
+    cfg = ppo.cfg
+    B, T, n_mb = cfg.num_envs, cfg.num_steps, cfg.num_minibatches
+    mesh = parallel.batch_sharding(B).mesh
+    key, k_col, k_learn = jax.random.split(st.key, 3)
+
+    def local(runner, params, opt_state, obs_stats, k_col, k_learn):
+        b = runner.z.shape[0]
+        first = jax.lax.axis_index(AXIS) * b  # global index of this device's first env
+        keys = jax.lax.dynamic_slice_in_dim(jax.random.split(k_col, (T, B)), first, b, axis=1)
+        runner, batch, ep = collect(ppo.env, ppo.net, params, obs_stats, ppo.ctx, runner, None, sample, T,
+                                    step_keys=keys)
+        adv, ret = ppo.advantages(batch)                                   # [T, b], per env
+        env_ids = first + jnp.arange(b)
+        m = T // n_mb
+
+        def epoch(carry, k):
+            params, opt_state = carry
+            perm = jax.vmap(lambda e: jax.random.permutation(jax.random.fold_in(k, e), T))(env_ids)  # [b, T]
+            idx = perm.reshape(b, n_mb, m).transpose(1, 0, 2)                                      # [n, b, m]
+
+            def pick(x):  # [T, b, ...] -> [n, b * m, ...]
+                xt = jnp.moveaxis(x, 0, 1)                                                         # [b, T, ...]
+                g = jax.vmap(lambda i: jax.vmap(lambda row, j: row[j])(xt, i))(idx)                # [n, b, m, ...]
+                return g.reshape((n_mb, b * m) + x.shape[2:])
+
+            mbs = jax.tree_util.tree_map(pick, (batch.replace(carry0=None), adv, ret))
+
+            def minibatch(carry, mb_data):
+                params, opt_state = carry
+                mb, a, r = mb_data
+                w_sum = jnp.maximum(_psum(mb.valid.sum()), 1.0)
+                if cfg.normalize_adv:  # over the whole minibatch, all devices
+                    mu = _psum(jnp.sum(mb.valid * a)) / w_sum
+                    sd = jnp.sqrt(_psum(jnp.sum(mb.valid * jnp.square(a - mu))) / w_sum)
+                    a = (a - mu) / (sd + 1e-8)
+                grads, info = jax.grad(ppo._loss, has_aux=True)(params, mb, a, r, w_sum)
+                grads, info = _psum(grads), _psum(info)
+                updates, opt_state = ppo.tx.update(grads, opt_state, params)
+                return (optax.apply_updates(params, updates), opt_state), info
+
+            return jax.lax.scan(minibatch, (params, opt_state), mbs)
+
+        (params, opt_state), info = jax.lax.scan(epoch, (params, opt_state), jax.random.split(k_learn, cfg.num_epochs))
+        if cfg.normalize_obs:
+            x = batch.raw_obs.reshape(-1, batch.raw_obs.shape[-1])
+            n = _psum(x.shape[0])
+            mean = _psum(x.sum(0)) / n
+            var = _psum(jnp.square(x - mean).sum(0)) / n
+            obs_stats = normalize.merge(obs_stats, mean, var, n)
+        metrics = jax.tree_util.tree_map(jnp.mean, info)
+        metrics["mean_reward"] = _psum(batch.reward.sum()) / (T * B)
+        ep = jax.tree_util.tree_map(_psum, ep)
+        return runner, params, opt_state, obs_stats, metrics, ep
+
+    rep = PartitionSpec()
+    run = jax.shard_map(local, mesh=mesh, in_specs=(parallel.ENVS, rep, rep, rep, rep, rep),
+                        out_specs=(parallel.ENVS, rep, rep, rep, rep, rep), check_vma=False)
+    runner, params, opt_state, obs_stats, metrics, ep = run(st.runner, st.params, st.opt_state, st.obs_stats,
+                                                            k_col, k_learn)
+    st = st.replace(runner=runner, params=params, opt_state=opt_state, obs_stats=obs_stats, key=key,
+                    update_step=st.update_step + 1)
+    return st, metrics, ep
