@@ -140,3 +140,4 @@ def test_data_parallel_refuses_what_it_cannot_split():
         check(PPOConfig(data_parallel=True, net=networks.NetConfig(kind="lstm")))
     with pytest.raises(ValueError, match="ppo.num_steps=10 must be divisible by ppo.num_minibatches=4"):
         check(PPOConfig(data_parallel=True, num_steps=10, num_envs=4))
+

@@ -45,7 +45,7 @@ class PhysicsModel:
         for k in self.kinds:
             mj_model = k.prepare(mj_model, spec)
         self.mj = mj_model
-        self.mx = mjx.put_model(mj_model)
+        self.mx = mjx.put_model(mj_model, device=jax.local_devices()[0])  # this process's (see plant.py)
         self.joint_damping_dofs = np.asarray(joint_damping_dofs, np.int32)
         for k in self.kinds:
             k.setup(self)

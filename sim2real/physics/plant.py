@@ -7,6 +7,7 @@ own MJCF describes exactly the system that env trains on (``algos/from_diagnosis
 """
 from __future__ import annotations
 
+import jax
 import mujoco
 from sim2real._mjx import mjx
 
@@ -41,4 +42,6 @@ class Plant:
         self.physics = PhysicsModel(m, self.spec, joint_damping_dofs)
         self.mj = self.physics.mj
         self.effects = Effects(self.mj, self.spec, EffectsConfig(max_delay=max_delay, coulomb_eps=coulomb_eps))
-        self.data0 = mjx.make_data(self.physics.mx)
+        # this process's own device: with several processes (jax.distributed) JAX's first device
+        # may belong to another one, which MJX's default would pick
+        self.data0 = mjx.make_data(self.physics.mx, device=jax.local_devices()[0])

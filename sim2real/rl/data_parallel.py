@@ -107,3 +107,26 @@ def update(ppo, st, sample):
     st = st.replace(runner=runner, params=params, opt_state=opt_state, obs_stats=obs_stats, key=key,
                     update_step=st.update_step + 1)
     return st, metrics, ep
+
+
+def globalize(ppo, st):
+    """A PPO state (one seed, as ``PPO.init`` returns it) as arrays over every process's devices:
+    the runner split along its env axis, everything else replicated. Needed when several
+    processes run the same program (``jax.distributed.initialize``, one process per host or per
+    GPU): each process holds only its devices' parts. Every process must pass the same ``st``
+    (same seed, same config); it keeps only what its devices hold."""
+    mesh = parallel.batch_sharding(ppo.cfg.num_envs).mesh
+    split, whole = jax.sharding.NamedSharding(mesh, parallel.ENVS), jax.sharding.NamedSharding(mesh, PartitionSpec())
+
+    def put(x, sharding):
+        x = jax.device_get(x)
+        return jax.make_array_from_callback(x.shape, sharding, lambda idx: x[idx])
+
+    runner = jax.tree_util.tree_map(lambda x: put(x, split), st.runner)
+    rest = jax.tree_util.tree_map(lambda x: put(x, whole), st.replace(runner=None))
+    return rest.replace(runner=runner)
+
+
+def local_value(x):
+    """A replicated array's value in this process (every process holds a full copy)."""
+    return jax.device_get(x.addressable_data(0)) if hasattr(x, "addressable_data") else jax.device_get(x)
