@@ -97,18 +97,22 @@ class ADR(OuterLoop):
         self.ppo = PPO(env, ppo_cfg, num_updates, ctx)
         self.horizon = cfg.eval_horizon or env.config.episode_length
         self.eval_env = with_horizon(env, self.horizon)
-        # evaluation episode k pins parameter cells[k] // 2 to its lower (even) or upper (odd) bound
+        # evaluation episode k pins parameter cells[k] // 2 to its lower (even) or upper (odd) bound;
+        # cell_of[k] is its one-hot row, so the per-cell sums are one matrix product
         self.cells = np.arange(cfg.num_evals) % (2 * D)
+        self.cell_of = np.eye(2 * D, dtype=np.float32)[self.cells]                 # [K, 2D]
 
     # ------------------------------------------------------------------------------------------
-    def draw(self, key, low, high, pin=None):
-        """``z_sub [D]`` ~ U(low, high); ``pin`` (a cell index ``2 i + side``, or None) puts
-        parameter ``i`` on its lower (side 0) or upper (side 1) bound."""
-        z = low + jax.random.uniform(key, low.shape) * (high - low)
-        if pin is None:
-            return z
-        i, side = pin // 2, pin % 2
-        return z.at[i].set(jnp.where(side == 1, high[i], low[i]))
+    @staticmethod
+    def draw(key, low, high):
+        """``z_sub [D]`` ~ U(low, high)."""
+        return low + jax.random.uniform(key, low.shape) * (high - low)
+
+    @staticmethod
+    def pin(z_sub, low, high, cell):
+        """``z_sub [D]`` with parameter ``cell // 2`` on its lower (``cell`` even) or upper (odd) bound."""
+        i = cell // 2
+        return z_sub.at[i].set(jnp.where(cell % 2 == 1, high[i], low[i]))
 
     def sampler(self, low, high):
         D, p_b = len(self.space), self.cfg.p_boundary
@@ -116,7 +120,7 @@ class ADR(OuterLoop):
         def sample(key):
             k_z, k_b, k_cell = jax.random.split(key, 3)
             z = self.draw(k_z, low, high)
-            pinned = self.draw(k_z, low, high, jax.random.randint(k_cell, (), 0, 2 * D))
+            pinned = self.pin(z, low, high, jax.random.randint(k_cell, (), 0, 2 * D))
             return self.space.expand(jnp.where(jax.random.uniform(k_b) < p_b, pinned, z))
 
         return sample
@@ -131,15 +135,14 @@ class ADR(OuterLoop):
     def update(self, st: ADRState):
         ppo_st, metrics = self.ppo.update(st.ppo, self.sampler(st.low, st.high))
         key, k_z, k_ep = jax.random.split(st.key, 3)
-        cells = jnp.asarray(self.cells)
-        z_sub = jax.vmap(lambda k, c: self.draw(k, st.low, st.high, c))(jax.random.split(k_z, len(cells)), cells)
+        z_sub = jax.vmap(lambda k, c: self.pin(self.draw(k, st.low, st.high), st.low, st.high, c))(
+            jax.random.split(k_z, len(self.cells)), jnp.asarray(self.cells))
         res = episodes(self.eval_env, self.ppo, ppo_st.params, ppo_st.obs_stats,
                        jax.vmap(self.space.expand)(z_sub), k_ep, 1)
         J = res["return"][:, 0]
         D = len(self.space)
-        onehot = jax.nn.one_hot(cells, 2 * D)                                  # [K, 2D]
-        buf_sum = st.buf_sum + (onehot * J[:, None]).sum(0).reshape(D, 2)
-        buf_n = st.buf_n + onehot.sum(0).reshape(D, 2)
+        buf_sum = st.buf_sum + (J @ self.cell_of).reshape(D, 2)
+        buf_n = st.buf_n + self.cell_of.sum(0).reshape(D, 2)
         low, high, buf_sum, buf_n = self.move_bounds(st.low, st.high, buf_sum, buf_n)
         st = st.replace(ppo=ppo_st, low=low, high=high, buf_sum=buf_sum, buf_n=buf_n, key=key)
         metrics.update(self.describe(st), adr_eval_return=J.mean())

@@ -15,6 +15,7 @@ import optax
 from flax import struct
 
 from sim2real.envs.base import Env
+from sim2real.rl import data_parallel
 from sim2real.rl import gae as gae_lib
 from sim2real.rl import networks, normalize
 from sim2real.rl.networks import NetConfig
@@ -102,8 +103,6 @@ def check(cfg: PPOConfig, prefix: str = "ppo.") -> None:
         raise ValueError(f"{prefix}num_envs * {prefix}num_steps = {cfg.batch_size} must be divisible by "
                          f"{prefix}num_minibatches={cfg.num_minibatches}")
     if cfg.data_parallel:
-        from sim2real.rl import data_parallel
-
         data_parallel.check(cfg)
 
 
@@ -150,8 +149,6 @@ class PPO:
     def update(self, st: PPOState, sample: Callable):
         """One PPO iteration: collect with ``sample`` for resets, then learn. Returns ``(state, metrics)``."""
         if self.cfg.data_parallel:
-            from sim2real.rl import data_parallel
-
             st, metrics, ep = data_parallel.update(self, st, sample)
             return st, self._episode_metrics(metrics, ep)
         key, k_col, k_learn = jax.random.split(st.key, 3)
