@@ -1,5 +1,6 @@
 """ES-MAML: the ES gradient estimate, the PPO adaptation operator, and the jitted, vmapped meta step."""
 import csv
+import dataclasses
 import os
 import shutil
 
@@ -94,7 +95,8 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
     per_update = 4 * (2 * 64 + 20)  # population x (inner updates x batch + one 20-step scoring episode)
     es = ["algo=es_maml", "num_seeds=2", "updates_per_chunk=1", f"total_steps={2 * per_update}",
           f"algo_options={{population: 4, inner_updates: 2, warm_start: {udr_run['run_dir']}}}"]
-    full = train(driver_config(tmp_path, *es, "name=full"))
+    test = ["test.every=100", "test.params=[mass:carriage]", "test.points=[[60],[140]]", "test.adapt=true"]
+    full = train(driver_config(tmp_path, *es, *test, "name=full"))
     train(driver_config(tmp_path, *es, "name=part", "max_chunks=1"))
     resumed = train(driver_config(tmp_path, *es, "name=part", "resume=true"))
 
@@ -110,6 +112,20 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
     rows = list(csv.DictReader(open(os.path.join(full["run_dir"], "metrics.csv"))))
     assert [int(r["env_steps"]) for r in rows if r["seed"] == "0"] == [per_update, 2 * per_update]
     assert all(np.isfinite(float(r["fitness_mean"])) for r in rows)
+
+    # the driver's test section scored the policies after adaptation (test.adapt=true): the
+    # adapted policies' returns, not those of the meta-policies themselves
+    from sim2real.training.driver import make_tester
+    scored = np.load(os.path.join(full["run_dir"], "test.npz"))["returns"][-1]            # [S, 2]
+    cfg = driver_config(tmp_path, *es, *test)
+    adapted = np.asarray(make_tester(cfg, full["env"], full["algo"])[0](full["state"]))
+    plain_cfg = dataclasses.replace(cfg, test=dataclasses.replace(cfg.test, adapt=False))
+    plain = np.asarray(make_tester(plain_cfg, full["env"], full["algo"])[0](full["state"]))
+    assert scored.shape == (2, 2) and np.all(np.isfinite(scored))
+    np.testing.assert_allclose(adapted, scored, rtol=1e-5)
+    assert not np.allclose(plain, scored)
+    with pytest.raises(Exception, match="test.adapt=true needs an algorithm with an adaptation operator"):
+        train(driver_config(tmp_path, "name=udr_adapt", "total_steps=128", *test))
 
     # few-shot evaluation of the run over a physics grid (scripts/evaluate.py adapt=true)
     evaluate = load_script("evaluate")

@@ -67,12 +67,24 @@ def make_tester(cfg: TrainConfig, env, algo):
         return None, None
     from sim2real.rl.episodes import episodes
 
+    if cfg.test.adapt and not algo.adapts:
+        raise config_lib.ConfigError(f"test.adapt=true needs an algorithm with an adaptation operator "
+                                     f"(es_maml), not algo={cfg.algo}")
     zs = test_physics(cfg.test, env)
     key = jax.random.PRNGKey(cfg.test.seed)
 
+    def score(params, stats, z):  # [N, P] -> [N]
+        return episodes(env, algo.ppo, params, stats, z, key, cfg.test.episodes)["return"].mean(-1)
+
     def one(state):
         params, stats = algo.policy(state)
-        return episodes(env, algo.ppo, params, stats, jnp.asarray(zs), key, cfg.test.episodes)["return"].mean(-1)
+        if not cfg.test.adapt:
+            return score(params, stats, jnp.asarray(zs))
+
+        def cell(z, k):  # the same adaptation keys at every evaluation, like the episodes'
+            p2, s2, _ = algo.adapt(params, stats, z, k)
+            return score(p2, s2, z[None])[0]
+        return jax.vmap(cell)(jnp.asarray(zs), jax.random.split(jax.random.fold_in(key, 1), len(zs)))
 
     return jax.jit(jax.vmap(one)), zs
 

@@ -41,6 +41,9 @@ class TestConfig:
       out_of_bounds: a point outside a parameter's physical bounds is refused before the run starts
         (``refuse``) or simulated at the nearest bound (``clip``: a test range that reaches past
         the bounds, as the LSDR paper's does).
+      adapt: score each seed's policy after the algorithm's adaptation operator on each test context
+        (ES-MAML's few-shot evaluation; refused for algorithms without one). The adaptation's env
+        steps are not counted in the run's budget.
     """
 
     every: int = 0
@@ -49,6 +52,7 @@ class TestConfig:
     episodes: int = 1
     seed: int = 7
     out_of_bounds: Literal["refuse", "clip"] = "refuse"
+    adapt: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
