@@ -11,6 +11,7 @@ effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim
 - ``oracle``: PPO on the true physics, written in the env's effect parameters;
 - ``udr_wide``: uniform DR over a wide box of what a careful user might randomise (mass,
   Coulomb friction, delay, damping), without knowing which effect is there;
+- ``lsdr``: LSDR's learned Gaussian over the same wide box (no real data);
 - ``simopt``: SimOpt from the same 3 recordings (``real=recordings``, one iteration: REPS on the
   recordings, then retraining), adapting Coulomb friction and delay from the nominal physics;
 - ``diag_dr_1``: the loop, once (``sim2real/tools/loop.py``: record 3 episodes of the nominal policy,
@@ -19,7 +20,9 @@ effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim
 
 Every policy runs 64 episodes on the real plant (the same initial states for all). Writes
 ``<out>/<env>/results.csv`` (method, seed, return), ``summary.md`` and ``closed_loop.png``, and
-the diagnoses' answers (``diagnoses.json``). Runs go to ``work`` (not kept).
+the diagnoses' answers (``diagnoses.json``). Runs go to ``work`` (not kept). With ``merge=true``
+the methods of this call replace theirs in an earlier ``results.csv`` and the others are kept
+(the nominal policy is trained again only where a method needs it: its recordings).
 """
 from __future__ import annotations
 
@@ -49,7 +52,19 @@ SETUPS = {
         "simopt": {"params": ["coulomb:hinge", "action_delay"], "low": [0.0, 0.0], "high": [0.6, 2.0],
                    "init_std": [0.15, 0.5]},
     },
+    "cartpole": {  # swing-up
+        "config": "configs/cartpole.yaml",
+        "plant": "benchmarks/plants/cartpole_real.xml",
+        # 3 N frictionloss on the rail; a 20 ms delay = 2 control steps of 10 ms
+        "truth": {"coulomb:slider": 3.0, "action_delay": 2.0},
+        "wide": {"mass:pole": (0.07, 0.13), "coulomb:slider": (0.0, 6.0), "action_delay": (0.0, 4.0),
+                 "joint_damping": (0.0, 0.01)},
+        "simopt": {"params": ["coulomb:slider", "action_delay"], "low": [0.0, 0.0], "high": [6.0, 4.0],
+                   "init_std": [1.5, 1.0]},
+    },
 }
+# ``lsdr`` learns its distribution inside the ``wide`` box with a plain MLP (the real plant's
+# physics is not an input a deployed policy has), from the box's centre (LSDR's Gaussian).
 
 
 def _train(base, name, work, **changes):
@@ -77,7 +92,10 @@ class Settings:
     out: str = os.path.join(HERE, "results", "closed_loop")
     work: str = "/tmp/closed_loop_runs"
     total_steps: int = 4_000_000
-    methods: str = "nominal,oracle,udr_wide,simopt,diag_dr_1,diag_dr_2"
+    methods: str = "nominal,oracle,udr_wide,lsdr,simopt,diag_dr_1,diag_dr_2"
+    merge: bool = False
+
+METHODS = ("nominal", "oracle", "udr_wide", "lsdr", "simopt", "diag_dr_1", "diag_dr_2")
 
 
 def main(args: Settings):
@@ -96,18 +114,26 @@ def main(args: Settings):
     os.makedirs(work)
     base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, setup['config'])}", "num_seeds=1",
                                             f"total_steps={args.total_steps}"])
-    methods = args.methods.split(",")
+    methods = [m for m in args.methods.split(",") if m]
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise SystemExit(f"methods: unknown {unknown}; known: {', '.join(METHODS)}")
     S = args.seeds
     rows, diagnoses, seconds = [], {}, {}
+    if args.merge:
+        rows, diagnoses, seconds = _earlier(args, methods)
 
     def add(method, rets):
         rows.extend({"method": method, "seed": s, "return": r} for s, r in enumerate(rets))
         print(f"{method:>10s}: " + ", ".join(f"{r:.1f}" for r in rets) + f"  (mean {np.mean(rets):.1f})", flush=True)
 
-    t = time.time()
-    nominal = _train(base, "nominal", work, num_seeds=S)
-    seconds["nominal"] = time.time() - t
-    add("nominal", _scores(nominal, plant, args.episodes, S))
+    needs_nominal = {"nominal", "simopt", "diag_dr_1", "diag_dr_2"} & set(methods)
+    if needs_nominal:
+        t = time.time()
+        nominal = _train(base, "nominal", work, num_seeds=S)
+        seconds["nominal"] = time.time() - t
+        if "nominal" in methods:
+            add("nominal", _scores(nominal, plant, args.episodes, S))
     if "oracle" in methods:
         t = time.time()
         r = _train(base, "oracle", work, num_seeds=S, dr=DRConfig(fixed=dict(setup["truth"])))
@@ -120,6 +146,15 @@ def main(args: Settings):
                                                                    high=tuple(v[1] for v in w.values())))
         seconds["udr_wide"] = time.time() - t
         add("udr_wide", _scores(r, plant, args.episodes, S))
+    if "lsdr" in methods:
+        t = time.time()
+        w = setup["wide"]
+        r = _train(base, "lsdr", work, num_seeds=S, algo="lsdr", algo_options={"dist": "gaussian"},
+                   dr=DRConfig(params=tuple(w), low=tuple(v[0] for v in w.values()), high=tuple(v[1] for v in w.values())))
+        seconds["lsdr"] = time.time() - t
+        add("lsdr", _scores(r, plant, args.episodes, S))
+    if not needs_nominal - {"nominal"}:
+        return write(args, setup, rows, diagnoses, seconds)
     # the one real budget: 3 episodes of each seed's nominal policy; SimOpt compares at the env's
     # control step, so it reads the same recordings every frame_skip-th row
     from sim2real.envs.registry import env_class
@@ -168,6 +203,26 @@ def main(args: Settings):
     write(args, setup, rows, diagnoses, seconds)
 
 
+def _earlier(args, methods):
+    """Rows, diagnoses and seconds of an earlier call for the methods this call does not run."""
+    out = os.path.join(args.out, args.env)
+    try:
+        with open(os.path.join(out, "results.csv")) as f:
+            rows = [dict(r, seed=int(r["seed"]), **{"return": float(r["return"])}) for r in csv.DictReader(f)
+                    if r["method"] not in methods]
+        with open(os.path.join(out, "diagnoses.json")) as f:
+            diagnoses = json.load(f) if not {"diag_dr_1", "diag_dr_2"} & set(methods) else {}
+    except FileNotFoundError as e:
+        raise SystemExit(f"merge=true: no earlier results to merge with ({e.filename})") from None
+    seconds = {}
+    try:
+        with open(os.path.join(out, "seconds.json")) as f:
+            seconds = {k: v for k, v in json.load(f).items() if k not in methods}
+    except FileNotFoundError:
+        pass
+    return rows, diagnoses, seconds
+
+
 def write(args, setup, rows, diagnoses, seconds):
     out = os.path.join(args.out, args.env)
     os.makedirs(out, exist_ok=True)
@@ -177,14 +232,17 @@ def write(args, setup, rows, diagnoses, seconds):
         w.writerows(rows)
     with open(os.path.join(out, "diagnoses.json"), "w") as f:
         json.dump(diagnoses, f, indent=2)
-    by = {}
+    with open(os.path.join(out, "seconds.json"), "w") as f:
+        json.dump({k: round(v, 1) for k, v in seconds.items()}, f, indent=2)
+    by = {m: [] for m in METHODS}
     for r in rows:
-        by.setdefault(r["method"], []).append(r["return"])
+        by[r["method"]].append(r["return"])
+    by = {m: v for m, v in by.items() if v}
     oracle = np.mean(by["oracle"]) if "oracle" in by else np.nan
-    nominal = np.mean(by["nominal"])
+    nominal = np.mean(by["nominal"]) if "nominal" in by else np.nan
     lines = [f"# Closed loop on the {args.env}: returns on the real plant ({setup['plant']})", "",
              f"Truth (env parameters): {setup['truth']}. {args.episodes} episodes per policy and seed; "
-             f"{len(by['nominal'])} seeds (independent chains). CPU JAX: runs are not bit-reproducible across machines.",
+             f"{args.seeds} seeds (independent chains). CPU JAX: runs are not bit-reproducible across machines.",
              "", "| method | mean | min | max | gap closed (nominal -> oracle) |", "|---|---|---|---|---|"]
     for m, v in by.items():
         gap = (np.mean(v) - nominal) / (oracle - nominal) if np.isfinite(oracle) and oracle != nominal else np.nan

@@ -121,6 +121,20 @@ def test_diagnosis_becomes_the_physics_and_a_box_around_it(tmp_path):
     assert from_diagnosis.resolve(dr, env) == dr
 
 
+def test_refitted_damping_on_a_joint_the_env_randomises_through_its_viscous_effect(tmp_path):
+    """The cart-pole env's joint_damping is the hinge's; a re-fitted rail damping becomes the rail's
+    viscous effect (the excess over the nominal 5e-4 N s/m); a fit below the nominal keeps it."""
+    env = make("cartpole")
+    refit = lambda v: {"damping:slider": {"nominal": 5e-4, "fitted": v, "std": 1e-4}}
+    more = _diagnosis(tmp_path / "a", env_model_path(env), {"damping:slider": 0.0105}, [], refit(0.0105))
+    dr = from_diagnosis.resolve(DRConfig(from_diagnosis=more, diagnosis_k=2.0), env)
+    assert dict(zip(dr.params, zip(dr.low, dr.high)))["viscous:slider"] == pytest.approx((0.0098, 0.0102))
+    less = _diagnosis(tmp_path / "b", env_model_path(env), {"damping:slider": 1e-4}, [], refit(1e-4))
+    with pytest.warns(UserWarning, match="can only add damping"):
+        dr = from_diagnosis.resolve(DRConfig(from_diagnosis=less, diagnosis_k=2.0), env)
+    assert dict(zip(dr.params, zip(dr.low, dr.high)))["viscous:slider"] == pytest.approx((0.0, 2e-4))
+
+
 def test_diagnosis_of_another_model_or_an_unknown_parameter_is_refused(tmp_path):
     env = make("pendulum")
     other = _diagnosis(tmp_path / "a", os.path.join(ROOT, "sim2real", "envs", "assets", "cartpole.xml"),

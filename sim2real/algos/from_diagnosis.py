@@ -17,6 +17,7 @@ import dataclasses
 import json
 import math
 import os
+import warnings
 
 import mujoco
 import numpy as np
@@ -89,6 +90,16 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
             j = mujoco.mj_name2id(em, mujoco.mjtObj.mjOBJ_JOINT, target)
             if j >= 0 and damping_dofs == [int(em.jnt_dofadr[j])]:
                 name = "joint_damping"
+            elif f"viscous:{target}" in env.spec:
+                # a re-fitted damping on a joint the env randomises only through its viscous effect
+                # (added to the declared damping): the fit's excess over the nominal; the env
+                # cannot take damping away, so a lower fit holds the nominal, with a warning
+                name, value = f"viscous:{target}", value - _default_in_diagnosis(d, name)
+                if value < 0:
+                    warnings.warn(f"dr.from_diagnosis: {kind}:{target} was fitted {-value:.3g} below the "
+                                  f"model's nominal; env '{env.name}' can only add damping there, so it "
+                                  f"keeps the nominal", stacklevel=2)
+                    value = 0.0
         if name not in env.spec:
             if not math.isclose(value, _default_in_diagnosis(d, name), rel_tol=1e-9, abs_tol=1e-12):
                 missing.append(name)
