@@ -1,10 +1,16 @@
-"""Brax's own PPO on Brax's MJX hopper, with our hopper run's budget and hyper-parameters.
+"""Brax's own PPO on a hopper, with our hopper run's budget and hyper-parameters: Brax's MJX hopper
+(``env=brax``) or sim2real's hopper through ``sim2real.interop.brax`` (``env=sim2real``; with
+``dr=true`` its physics redrawn at every reset from the leaderboard's training box, torso mass
+[1, 9] kg x friction [1.5, 2.5]).
 
     python benchmarks/brax_ppo_hopper.py num_timesteps=100000000 num_envs=4096 unroll_length=32 ...
+    python benchmarks/brax_ppo_hopper.py env=sim2real dr=true num_timesteps=20000000 discounting=0.995
 
-Prints evaluation returns against wall time (Brax evaluates ``num_evals`` times with 128 envs)
-and writes ``<out>/brax_ppo_hopper.csv``. Brax 0.14.2 calls ``jax.device_put_replicated``, which
-JAX 0.11 removed; a one-device shim is installed when it is missing.
+Prints evaluation returns against wall time (Brax evaluates ``num_evals`` times with 128 envs,
+deterministic policy; through the adapter each evaluation episode draws its own physics) and
+writes ``<out>/brax_ppo_hopper.csv`` (``brax_ppo_<env>[_dr]_seed<seed>.csv`` for env=sim2real).
+Brax 0.14.2 calls ``jax.device_put_replicated``, which JAX 0.11 removed; a one-device shim is
+installed when it is missing.
 """
 from __future__ import annotations
 
@@ -29,7 +35,8 @@ if not hasattr(jax, "device_put_replicated"):  # removed in JAX 0.11; brax 0.14.
 
 @dataclasses.dataclass
 class Settings:
-    """Brax PPO's own arguments (same names), the hidden layer width and the output folder."""
+    """Brax PPO's own arguments (same names), the hidden layer width, the output folder, the hopper
+    (``brax``: Brax's; ``sim2real``: ours through the adapter) and, for ours, ``dr`` (the box)."""
     num_timesteps: int = 100_000_000
     num_envs: int = 4096
     unroll_length: int = 32
@@ -46,6 +53,8 @@ class Settings:
     hidden: int = 128
     seed: int = 0
     out: str = "."
+    env: str = "brax"
+    dr: bool = False
 
 
 def main(argv):
@@ -56,7 +65,18 @@ def main(argv):
     from sim2real.common import config as config_lib
 
     args = config_lib.load(Settings, argv)
-    env = envs.get_environment("hopper", backend="mjx")
+    extra = {}
+    if args.env == "brax":
+        if args.dr:
+            raise SystemExit("dr=true: only with env=sim2real (Brax's hopper has no physics box here)")
+        env = envs.get_environment("hopper", backend="mjx")
+    elif args.env == "sim2real":
+        from sim2real.interop.brax import BraxEnv, wrap_for_training
+
+        env = BraxEnv("hopper", physics={"mass:torso": (1.0, 9.0), "friction": (1.5, 2.5)} if args.dr else None)
+        extra["wrap_env_fn"] = wrap_for_training
+    else:
+        raise SystemExit(f"env={args.env}: brax or sim2real")
     # env steps per update = batch_size * num_minibatches * unroll_length = num_envs * unroll_length
     batch_size = args.num_envs // args.num_minibatches
     net = functools.partial(ppo_networks.make_ppo_networks, policy_hidden_layer_sizes=(args.hidden,) * 2,
@@ -74,11 +94,12 @@ def main(argv):
               discounting=args.discounting, gae_lambda=args.gae_lambda, reward_scaling=args.reward_scaling,
               entropy_cost=args.entropy_cost, clipping_epsilon=args.clipping_epsilon,
               max_grad_norm=args.max_grad_norm, normalize_observations=True,
-              num_evals=args.num_evals, network_factory=net, seed=args.seed, progress_fn=progress)
+              num_evals=args.num_evals, network_factory=net, seed=args.seed, progress_fn=progress, **extra)
     total = time.time() - t0
     os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, "brax_ppo_hopper.csv"), "w", newline="") as f:
-        f.write(f"# brax {__import__('brax').__version__} PPO, hopper (mjx), device {jax.devices()[0].device_kind}, "
+    name = "brax_ppo_hopper.csv" if args.env == "brax" else f"brax_ppo_{args.env}{'_dr' if args.dr else ''}_seed{args.seed}.csv"
+    with open(os.path.join(args.out, name), "w", newline="") as f:
+        f.write(f"# brax {__import__('brax').__version__} PPO, hopper ({args.env}), device {jax.devices()[0].device_kind}, "
                 f"args {json.dumps(dataclasses.asdict(args))}\n")
         w = csv.DictWriter(f, fieldnames=["env_steps", "wall_seconds", "eval_return"])
         w.writeheader()

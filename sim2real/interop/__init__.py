@@ -1,6 +1,7 @@
 """sim2real's envs in the tools users already have: Gymnasium (``gymnasium.py``: a vector env
-and a single-env view, numpy at the boundary, batch on the device). Each adapter imports its
-library only when used."""
+and a single-env view, numpy at the boundary, batch on the device) and Brax (``brax.py``: a
+``brax.envs.Env`` whose physics is redrawn at every reset, for Brax's PPO / SAC). Each adapter
+imports its library only when used."""
 from __future__ import annotations
 
 from sim2real._lazy import exports
@@ -9,5 +10,7 @@ from sim2real._lazy import exports
 _EXPORTS = {
     "GymnasiumEnv": "sim2real.interop.gymnasium:GymnasiumEnv",
     "GymnasiumVectorEnv": "sim2real.interop.gymnasium:GymnasiumVectorEnv",
+    "BraxEnv": "sim2real.interop.brax:BraxEnv",
+    "brax_wrap_for_training": "sim2real.interop.brax:wrap_for_training",
 }
 __getattr__, __dir__, __all__ = exports(__name__, _EXPORTS)

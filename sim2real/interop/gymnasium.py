@@ -31,26 +31,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real.algos.base import DRConfig, DRSpace
-from sim2real.dists import uniform
-from sim2real.envs import Env, make
+from sim2real.envs import Env
 from sim2real.envs.autoreset import step_autoreset
-
-
-def _env(env: Env | str, **env_options) -> Env:
-    return make(env, **env_options) if isinstance(env, str) else env
-
-
-def _sampler(env: Env, physics: dict | None):
-    """``sample(key) -> z [P]``: ``physics={name: (low, high)}`` uniform, the rest at the defaults;
-    the box is checked by the rule every DR box follows (``algos.base.DRSpace``)."""
-    space = DRSpace(env, DRConfig(params=tuple(physics or ()), low=tuple(float(v[0]) for v in (physics or {}).values()),
-                                  high=tuple(float(v[1]) for v in (physics or {}).values())))
-    if not len(space):
-        base = jnp.asarray(space.base)
-        return lambda key: base
-    box = uniform.make(space.low, space.high)
-    return lambda key: space.expand(uniform.sample(key, box))
+from sim2real.interop.physics import env_of as _env, sampler as _sampler
 
 
 def _spaces(env: Env):
