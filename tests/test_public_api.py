@@ -6,7 +6,7 @@ import sys
 import pytest
 
 PACKAGES = ["sim2real", "sim2real.sysid", "sim2real.physics", "sim2real.algos", "sim2real.rl", "sim2real.training",
-            "sim2real.tools", "sim2real.common", "sim2real.interop"]
+            "sim2real.tools", "sim2real.common", "sim2real.interop", "sim2real.commands"]
 
 
 @pytest.mark.parametrize("package", PACKAGES)
@@ -53,7 +53,7 @@ def test_an_algorithm_must_meet_the_outer_loop_contract():
 # Each subpackage imports only from the layers below it (and itself): the driver above the
 # algorithms, the algorithms above the PPO and the diagnosis, those above the envs.
 LAYERS = {"common": 0, "physics": 0, "dists": 0, "envs": 1, "rl": 2, "sysid": 2, "algos": 3, "interop": 4,
-          "training": 4, "tools": 5}
+          "training": 4, "tools": 5, "commands": 6}
 
 
 def _sim2real_imports(path):

@@ -127,15 +127,13 @@ def settings(cls, argv):
     or value prints ``error: ...`` (with "did you mean") and exits 2. Errors after this point keep
     their tracebacks (a benchmark's failure is a bug to read, not a user's typo).
     """
-    import dataclasses
-
     from sim2real.common.config import ConfigError, load
 
     if any(a in ("-h", "--help", "help") for a in argv):
+        from sim2real.common.config import help_text
+
         print(sys.modules["__main__"].__doc__ or "")
-        print("settings (key=value):")
-        for f in dataclasses.fields(cls):
-            print(f"  {f.name}={f.default!r}" if f.default is not dataclasses.MISSING else f"  {f.name} (required)")
+        print(f"settings (key=value):\n{help_text(cls)}")
         sys.exit(0)
     try:
         return load(cls, argv)
@@ -144,13 +142,22 @@ def settings(cls, argv):
         sys.exit(2)
 
 
-def main_guard(fn, argv):
+def main_guard(fn, argv, doc: str | None = None, configs: tuple[str, ...] = ()):
     """Run ``fn(argv)``; user errors print ``error: ...`` to stderr and exit with status 2; Ctrl-C
-    and SIGTERM exit with status 130 after the job's own clean-up ran."""
+    and SIGTERM exit with status 130 after the job's own clean-up ran. ``-h`` prints ``doc`` (the
+    ``__main__`` module's docstring by default) and every key of the ``configs``
+    (``"module:Class"`` typed configs: key, type, default, one line of doc), then returns 0."""
     from sim2real.common.config import ConfigError
 
     if any(a in ("-h", "--help", "help") for a in argv):
-        print(sys.modules["__main__"].__doc__ or "")
+        import importlib
+
+        from sim2real.common.config import help_text
+
+        print(doc if doc is not None else (sys.modules["__main__"].__doc__ or ""))
+        for spec in configs:
+            module, name = spec.split(":")
+            print(f"keys of {name} (key=value):\n{help_text(getattr(importlib.import_module(module), name))}\n")
         return 0
     # SIGTERM (a scheduler's stop) unwinds like Ctrl-C, so every ``finally`` runs
     global _TERMINATED

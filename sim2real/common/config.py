@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import os
 import types
 import typing
 from typing import Any
@@ -35,6 +36,73 @@ def all_keys(cls, prefix: str = "") -> list[str]:
         if dataclasses.is_dataclass(t):
             keys += all_keys(t, prefix + f.name + ".")
     return keys
+
+
+def _attribute_docs(cls) -> dict[str, str]:
+    """``{field: first sentence}`` from the ``Attributes:`` section of ``cls``'s docstring."""
+    import inspect
+    import re
+
+    docs, name, indent = {}, None, None
+    lines = inspect.cleandoc(cls.__doc__ or "").splitlines()
+    if "Attributes:" not in lines:
+        return docs
+    for line in lines[lines.index("Attributes:") + 1:]:
+        if not line.strip():
+            continue
+        width = len(line) - len(line.lstrip())
+        m = re.match(r"\s*([\w, ]+):\s*(.*)", line)
+        if m and (indent is None or width == indent):
+            indent = width
+            names = [n.strip() for n in m.group(1).split(",")]
+            for n in names:
+                docs[n] = m.group(2)
+            name = names
+        elif name and indent is not None and width > indent:
+            for n in name:
+                docs[n] += " " + line.strip()
+        else:
+            break
+    return {n: _first_clause(text) for n, text in docs.items()}
+
+
+def _first_clause(text: str, width: int = 110) -> str:
+    """Up to the first '. ' or '; ' outside parentheses (not after "e.g" / "i.e"), at most ``width``."""
+    depth = 0
+    for i, c in enumerate(text):
+        depth += (c == "(") - (c == ")")
+        if depth == 0 and c in ".;" and text[i + 1:i + 2] in (" ", "") and not text[:i].endswith(("e.g", "i.e")):
+            text = text[:i]
+            break
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
+def describe(cls, prefix: str = "") -> list[tuple[str, str, str, str]]:
+    """``(dotted key, type, default, one line of doc)`` for every key of a dataclass config, nested
+    sections included (what ``-h`` prints)."""
+    rows, hints, docs = [], _hints(cls), _attribute_docs(cls)
+    for f in dataclasses.fields(cls):
+        t = hints[f.name]
+        if dataclasses.is_dataclass(t):
+            rows += describe(t, prefix + f.name + ".")
+            continue
+        if f.default is not dataclasses.MISSING:
+            default = repr(f.default)
+        elif f.default_factory is not dataclasses.MISSING:
+            default = repr(f.default_factory())
+        else:
+            default = "(required)"
+        kind = f.type if isinstance(f.type, str) else getattr(t, "__name__", str(t))
+        default = default if len(default) <= 30 else default[:27] + "..."
+        rows.append((prefix + f.name, kind.replace("typing.", ""), default, docs.get(f.name, "")))
+    return rows
+
+
+def help_text(cls) -> str:
+    """Every key of ``cls`` as aligned lines: ``key  type  default  doc``."""
+    rows = describe(cls)
+    w = [max(len(r[i]) for r in rows) for i in range(3)]
+    return "\n".join(f"  {k:<{w[0]}}  {t:<{w[1]}}  {d:<{w[2]}}  {doc}".rstrip() for k, t, d, doc in rows)
 
 
 def _unknown(key: str, cls, prefix: str) -> ConfigError:
@@ -212,11 +280,28 @@ def split(argv: list[str], cls) -> tuple[list[str], list[str]]:
     return mine, [a for a in argv if a not in mine]
 
 
+BUNDLED = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
+
+
+def bundled(name: str) -> str:
+    """``config=NAME``: a file where one exists, else the bundled ``sim2real/configs/NAME.yaml``
+    (installed with the package, so ``sim2real-train config=pendulum`` works from any folder)."""
+    if os.path.exists(name) or os.sep in name or name.endswith((".yaml", ".yml")):
+        return name
+    path = os.path.join(BUNDLED, name + ".yaml")
+    if not os.path.exists(path):
+        known = sorted(f[:-5] for f in os.listdir(BUNDLED) if f.endswith(".yaml"))
+        raise ConfigError(f"config={name}: no such file, nor a bundled config (bundled: {', '.join(known)})")
+    return path
+
+
 def load(cls, argv: list[str]):
-    """Config of type ``cls`` from ``config=PATH`` (YAML) and ``key=value`` overrides."""
+    """Config of type ``cls`` from ``config=PATH`` (YAML; or a bundled config's name) and
+    ``key=value`` overrides."""
     path, overrides = parse_args(argv, raw=True)
     data: dict = {}
     if path:
+        path = bundled(path)
         try:
             with open(path) as f:
                 data = yaml.safe_load(f) or {}
