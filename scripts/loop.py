@@ -3,7 +3,9 @@
 The command lives in ``sim2real/commands/loop.py`` (installed as ``sim2real-loop``; also
 ``python -m sim2real loop``); ``-h`` lists every key.
 """
-from sim2real.commands.loop import main, run  # noqa: F401  (tests call main in-process)
+from sim2real.commands.loop import main, run
+
+__all__ = ["main", "run"]  # main: tests call it in-process
 
 if __name__ == "__main__":
     run()

@@ -3,7 +3,9 @@
 The command lives in ``sim2real/commands/train.py`` (installed as ``sim2real-train``; also
 ``python -m sim2real train``); ``-h`` lists every key.
 """
-from sim2real.commands.train import main, run  # noqa: F401  (tests call main in-process)
+from sim2real.commands.train import main, run
+
+__all__ = ["main", "run"]  # main: tests call it in-process
 
 if __name__ == "__main__":
     run()

@@ -46,6 +46,27 @@ def test_good_recording_loads(tmp_path):
     np.testing.assert_allclose(rec.get("qpos", "hinge"), np.sin(t), atol=1e-8)
 
 
+def test_parquet_recording_loads_like_the_csv_and_names_its_problems(tmp_path):
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    t, cols = _good()
+    save_csv(str(tmp_path / "ok.csv"), t, cols)
+    table = {"time": t, **cols}
+    pq.write_table(pa.table(table), str(tmp_path / "ok.parquet"))
+    a, b = load(str(tmp_path / "ok.csv"), _model()), load(str(tmp_path / "ok.parquet"), _model())
+    np.testing.assert_allclose(b.get("qpos", "hinge"), a.get("qpos", "hinge"), atol=1e-8)
+    assert b.dt == pytest.approx(a.dt)
+    gap = pa.array([float(v) if i != 7 else None for i, v in enumerate(cols["qpos:hinge"])])  # a null in the 8th row
+    pq.write_table(pa.table({"time": t, "qpos:hinge": gap, "ctrl:motor": cols["ctrl:motor"]}), str(tmp_path / "gap.parquet"))
+    with pytest.raises(RecordingError, match="gap.parquet: non-finite value nan in column 'qpos:hinge' at data row 8"):
+        load(str(tmp_path / "gap.parquet"), _model())
+    pq.write_table(pa.table({"time": t, "qpos:hinge": ["x"] * len(t), "ctrl:motor": cols["ctrl:motor"]}),
+                   str(tmp_path / "text.parquet"))
+    with pytest.raises(RecordingError, match="text.parquet: column 'qpos:hinge' holds string, not numbers"):
+        load(str(tmp_path / "text.parquet"), _model())
+
+
 @pytest.mark.parametrize("case,match", [
     ("no_time", "no 'time' column"),
     ("unknown_joint", "column 'qpos:elbow' names joint 'elbow'.*model joints: hinge"),

@@ -13,8 +13,9 @@ column                 meaning
 ``qfrc:<joint>``       known external generalised force on the joint (optional)
 =====================  ===========================================================
 
-CSV (header row), NPZ (arrays named like the columns) and MATLAB ``.mat`` (variables named like
-the columns with ``:`` written as ``__``, e.g. ``qpos__axis``) are read. Every problem raises
+CSV (header row), NPZ (arrays named like the columns), Parquet (numeric columns named like the
+columns; pyarrow) and MATLAB ``.mat`` (variables named like the columns with ``:`` written as
+``__``, e.g. ``qpos__axis``) are read. Every problem raises
 :class:`RecordingError` naming the file and the column or row.
 """
 from __future__ import annotations
@@ -124,8 +125,26 @@ def _read_mat(path: str) -> dict[str, np.ndarray]:
     return {k.replace("__", ":"): np.asarray(v, np.float64).ravel() for k, v in raw.items() if not k.startswith("__")}
 
 
+def _read_parquet(path: str) -> dict[str, np.ndarray]:
+    """Apache Parquet (pyarrow): one numeric column per recording column; a null becomes NaN,
+    which the validation then reports by column and row."""
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise RecordingError(f"{path}: reading Parquet needs pyarrow (pip install pyarrow)") from None
+    table = pq.read_table(path)
+    out = {}
+    for name in table.column_names:
+        col = table.column(name)
+        if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
+            raise RecordingError(f"{path}: column '{name}' holds {col.type}, not numbers")
+        out[name] = col.cast(pa.float64()).to_numpy(zero_copy_only=False)
+    return out
+
+
 # one reader per format; a new format is one function here (and its test)
-READERS = {".csv": _read_csv, ".npz": _read_npz, ".mat": _read_mat}
+READERS = {".csv": _read_csv, ".npz": _read_npz, ".mat": _read_mat, ".parquet": _read_parquet}
 
 
 def _read_table(path: str) -> dict[str, np.ndarray]:
