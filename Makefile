@@ -5,7 +5,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test test-slow bench clean
+.PHONY: setup demo test test-slow bench docs clean
 
 setup: $(STAMP)
 
@@ -30,5 +30,11 @@ bench: setup
 	$(PY) -m pip install -q -c constraints-cpu.txt -e ".[bench]"
 	$(PY) benchmarks/throughput.py tag=cpu-2core
 
+# the API reference from the docstrings (pdoc), every public module: docs/api/index.html
+docs: setup
+	$(PY) -m pip install -q -c constraints-cpu.txt pdoc
+	$(PY) -m pdoc -o docs/api --docformat google $$($(PY) -c "import pkgutil, sim2real; print(' '.join(['sim2real'] + [m.name for m in pkgutil.walk_packages(sim2real.__path__, 'sim2real.') if '._' not in m.name and not m.name.endswith('__main__')]))")
+	@echo "API reference: docs/api/index.html"
+
 clean:
-	rm -rf $(VENV) runs .pytest_cache
+	rm -rf $(VENV) runs .pytest_cache docs/api
