@@ -130,9 +130,10 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
     # few-shot evaluation of the run over a physics grid (scripts/evaluate.py adapt=true)
     evaluate = load_script("evaluate")
     evaluate.main([f"run={full['run_dir']}", "adapt=true", "x=mass:carriage=60,140", "episodes=1"])
-    for name in ("returns.csv", "returns_before.csv"):
-        table = np.loadtxt(os.path.join(full["run_dir"], "eval", name), delimiter=",", skiprows=1)
-        assert table.shape == (2, 2) and np.all(np.isfinite(table[:, 1]))
+    for name in ("returns.csv", "returns_before.csv"):  # mass, mean, std, one column per seed
+        table = np.loadtxt(os.path.join(full["run_dir"], "eval", "mass-carriage", name), delimiter=",", skiprows=1)
+        assert table.shape == (2, 5) and np.all(np.isfinite(table[:, 1]))
+        np.testing.assert_allclose(table[:, 1], table[:, 3:].mean(1), rtol=1e-4)
     # a run folder without checkpoints is evaluated from its exported policies: same numbers
     part = os.path.join(str(tmp_path), "part")
     shutil.rmtree(os.path.join(part, "checkpoints"))
@@ -142,7 +143,8 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
     open(cfg_path, "w").write(text.replace(udr_run["run_dir"], os.path.join(str(tmp_path), "gone")))
     evaluate.main([f"run={part}", "adapt=true", "x=mass:carriage=60,140", "episodes=1"])
     for name in ("returns.csv", "returns_before.csv"):
-        assert open(os.path.join(part, "eval", name)).read() == open(os.path.join(full["run_dir"], "eval", name)).read()
+        assert (open(os.path.join(part, "eval", "mass-carriage", name)).read()
+                == open(os.path.join(full["run_dir"], "eval", "mass-carriage", name)).read())
     with pytest.raises(Exception, match="adaptation operator"):  # a UDR run has none
         evaluate.main([f"run={udr_run['run_dir']}", "adapt=true", "x=mass:carriage=60,140"])
 

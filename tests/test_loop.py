@@ -189,3 +189,19 @@ def test_one_loop_iteration_end_to_end(tmp_path):
         name = "joint_damping" if name.startswith("damping:") else name
         assert name in cfg["dr"]["params"] or name in cfg["dr"]["fixed"], name
     assert os.path.exists(out / "iter_1" / "run" / "policy.msgpack")
+
+
+def test_evaluation_holds_the_box_centre_names_its_folder_by_axes_and_keeps_every_seed(tmp_path):
+    from sim2real.tools.evaluate import EvaluateConfig, evaluate_run
+
+    run = train(tiny(tmp_path, "name=dr", "num_seeds=2", "dr.params=[mass:pole,coulomb:hinge]",
+                     "dr.low=[0.5,0.0]", "dr.high=[1.5,0.2]"))["run_dir"]
+    res = evaluate_run(EvaluateConfig(run=run, x="mass:pole=0.5,1.5", episodes=1, progress=False))
+    env = make("pendulum")
+    assert res["held"] == {"coulomb:hinge": pytest.approx(0.1)}          # not the env default, 0
+    np.testing.assert_allclose(res["z"][:, env.spec.index("coulomb:hinge")], 0.1, rtol=1e-6)
+    assert res["out"] == os.path.join(run, "eval", "mass-pole")
+    header = open(os.path.join(res["out"], "returns.csv")).readline().strip()
+    assert header == "mass:pole,return,std,seed_0,seed_1"
+    assert os.path.getsize(os.path.join(res["out"], "returns.png")) > 0
+    assert res["std"].shape == (2,) and np.all(res["std"] >= 0)

@@ -59,7 +59,8 @@ class EvaluateConfig:
       x: first grid axis, ``name=low:high:count`` or ``name=v1,v2,...`` (a physics parameter).
       y: optional second axis, same form.
       episodes: deterministic episodes per grid cell and seed.
-      out: output folder (default ``<run>/eval``; only an evaluation folder is replaced).
+      out: output folder (default ``<run>/eval/<axes>``, e.g. ``eval/mass-pole__gain-motor``: one
+        folder per grid; only an evaluation folder is replaced).
       seed: PRNG seed of the episodes' initial states.
       adapt: adapt the policy to each cell first (ES-MAML's adaptation operator: few-shot evaluation);
         the un-adapted returns go to ``returns_before.csv``.
@@ -78,7 +79,10 @@ class EvaluateConfig:
 
 def evaluate_run(cfg: EvaluateConfig) -> dict:
     """Evaluate every seed of ``cfg.run`` over the grid; writes ``returns.csv`` (+ ``returns_before.csv``
-    with ``adapt``) and ``returns.png`` into ``cfg.out`` (moved into place when complete).
+    with ``adapt``; the mean over seeds, their standard deviation and every seed's) and ``returns.png``
+    (with the seeds' spread) into ``cfg.out`` (moved into place when complete). Randomised parameters
+    that are not on the grid are held at the centre of the run's training box (the others at the
+    run's fixed physics); the plot says so.
 
     Returns ``{'out', 'names', 'z' [N, P], 'returns' (grid-shaped, mean over seeds), 'before'}``.
     Everything is checked (run folder, axes, names, bounds, adapt) before anything is written.
@@ -100,7 +104,7 @@ def evaluate_run(cfg: EvaluateConfig) -> dict:
         axes = dict([parse_axis(cfg.x)] + ([parse_axis(cfg.y)] if cfg.y else []))
     except ValueError as e:
         raise config_lib.ConfigError(str(e)) from None
-    out = cfg.out or os.path.join(run, "eval")
+    out = cfg.out or os.path.join(run, "eval", "__".join(n.replace(":", "-") for n in axes))
     inputs = [os.path.join(run, "config.yaml")]
     output.check(out, "evaluation", inputs=inputs, overwrite=True)
     if os.path.isdir(os.path.join(run, "checkpoints")):
@@ -110,7 +114,12 @@ def evaluate_run(cfg: EvaluateConfig) -> dict:
         rcfg, env, algo, all_params, all_stats = load_policy(run)
     for n in axes:
         env.spec.index(n)  # an unknown name lists the known ones
-    zs, names = grid(env, axes, base=algo.space.base)
+    base = np.asarray(algo.space.base, np.float32).copy()
+    held = {}  # randomised parameters off the grid: the training box's centre, not the env default
+    for n, lo, hi in zip(rcfg.dr.params, rcfg.dr.low, rcfg.dr.high):
+        if n not in axes:
+            base[env.spec.index(n)] = held[n] = (lo + hi) / 2
+    zs, names = grid(env, axes, base=base)
     env.check_z(zs)
     if cfg.adapt and not algo.adapts:
         raise config_lib.ConfigError(f"adapt=true needs an algorithm with an adaptation operator "
@@ -135,21 +144,27 @@ def evaluate_run(cfg: EvaluateConfig) -> dict:
             if cfg.adapt:
                 rets.append(np.asarray(adapted(params, stats, jnp.asarray(zs), key)))
                 bar.step(text=f"seed {s}: adapted and evaluated")
-    ret = np.mean(rets if cfg.adapt else before, 0).reshape(shape)
+    per_seed = np.asarray(rets if cfg.adapt else before)          # [S, N]
+    ret, spread = per_seed.mean(0).reshape(shape), per_seed.std(0).reshape(shape)
 
-    def write(path, values):
+    def write(path, seeds):  # seeds [S, N]
         with open(path, "w") as f:
-            f.write(",".join(names) + ",return\n")
-            for z, r in zip(zs, np.ravel(values)):
-                f.write(",".join(f"{z[env.spec.index(n)]:.6g}" for n in names) + f",{r:.6g}\n")
+            f.write(",".join(names) + ",return,std," + ",".join(f"seed_{s}" for s in range(len(seeds))) + "\n")
+            for i, z in enumerate(zs):
+                f.write(",".join(f"{z[env.spec.index(n)]:.6g}" for n in names)
+                        + f",{seeds[:, i].mean():.6g},{seeds[:, i].std():.6g},"
+                        + ",".join(f"{v:.6g}" for v in seeds[:, i]) + "\n")
 
     # written aside and moved into place when complete; only an evaluation folder is replaced
     with output.staged(out, "evaluation", inputs=inputs, overwrite=True) as tmp:
-        write(os.path.join(tmp, "returns.csv"), ret)
+        write(os.path.join(tmp, "returns.csv"), per_seed)
         if cfg.adapt:
-            write(os.path.join(tmp, "returns_before.csv"), np.mean(before, 0))
+            write(os.path.join(tmp, "returns_before.csv"), np.asarray(before))
         box = {n: (lo, hi) for n, lo, hi in zip(rcfg.dr.params, rcfg.dr.low, rcfg.dr.high)}
         title = f"{rcfg.name}: mean return" + (" after adaptation" if cfg.adapt else "")
-        heatmap(axes, ret, os.path.join(tmp, "returns.png"), title=title, box=box)
-    return {"out": out, "names": names, "z": zs, "returns": ret,
+        subtitle = (f"{rcfg.num_seeds} seed(s) x {n_ep} deterministic episode(s) per cell"
+                    + ("; held at the training box's centre: " + ", ".join(f"{n}={v:.3g}" for n, v in held.items())
+                       if held else "") + "; other physics at the run's fixed values")
+        heatmap(axes, ret, os.path.join(tmp, "returns.png"), title=title, box=box, spread=spread, subtitle=subtitle)
+    return {"out": out, "names": names, "z": zs, "returns": ret, "std": spread, "held": held,
             "before": np.mean(before, 0).reshape(shape) if cfg.adapt else None}
