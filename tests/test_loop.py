@@ -205,3 +205,13 @@ def test_evaluation_holds_the_box_centre_names_its_folder_by_axes_and_keeps_ever
     assert header == "mass:pole,return,std,seed_0,seed_1"
     assert os.path.getsize(os.path.join(res["out"], "returns.png")) > 0
     assert res["std"].shape == (2,) and np.all(res["std"] >= 0)
+
+
+def test_tensorboard_gets_the_config_as_text_and_the_settings_as_hparams(tmp_path):
+    import glob
+
+    train(tiny(tmp_path, "name=tb", "tensorboard=true", "ppo.lr=0.00123"))
+    blobs = b"".join(open(p, "rb").read() for p in glob.glob(str(tmp_path / "tb" / "tb" / "**" / "events.*"),
+                                                             recursive=True))
+    assert b"lr: 0.00123" in blobs                        # the resolved config, as text
+    assert b"hparam/episode_return" in blobs and b"ppo.lr" in blobs and b"ppo.net.hidden" in blobs

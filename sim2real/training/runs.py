@@ -204,7 +204,31 @@ class MetricsLogger:
                 self.tb = SummaryWriter(os.path.join(run.dir, "tb"))
             except ImportError:  # optional at run time; declared in pyproject
                 self.tb = None
+        if self.tb is not None:  # the resolved config, readable beside the curves
+            import yaml
+
+            from sim2real.common.config import to_dict
+            self.tb.add_text("config", "```yaml\n" + yaml.safe_dump(to_dict(cfg), sort_keys=False) + "```",
+                             resume_from_update * steps_per_update)
+        self.last = {}
         self.t_start = time.time()
+
+    def hparams(self) -> dict:
+        """The config's scalar settings, flattened (``ppo.lr``...): TensorBoard's HPARAMS tab."""
+        from sim2real.common.config import to_dict
+
+        flat = {}
+
+        def walk(d, prefix=""):
+            for k, v in d.items():
+                if isinstance(v, dict):
+                    walk(v, f"{prefix}{k}.")
+                elif isinstance(v, (bool, int, float, str)):
+                    flat[prefix + k] = v
+                else:  # a tuple (a box, hidden sizes): as text
+                    flat[prefix + k] = str(v)
+        walk(to_dict(self.cfg))
+        return flat
 
     def _rewrite(self, rows):
         with open(self.path, "w", newline="") as f:
@@ -238,6 +262,7 @@ class MetricsLogger:
                 last = metrics[n][:, -1]
                 if np.isfinite(last).any():  # (no episode ended: no point, not a 0)
                     self.tb.add_scalar(n, float(np.nanmean(last)), u * self.per_update)
+                    self.last[n] = float(np.nanmean(last))
             self.tb.add_scalar("steps_per_second", k * self.per_update * cfg.num_seeds / seconds,
                                u * self.per_update)
 
@@ -251,6 +276,10 @@ class MetricsLogger:
 
     def close(self):
         if self.tb is not None:
+            # the settings against the last logged metrics (seed means), one row per run
+            metrics = {f"hparam/{k}": v for k, v in self.last.items() if k in ("episode_return", "fitness_mean")}
+            if metrics:
+                self.tb.add_hparams(self.hparams(), metrics, name="hparams")
             self.tb.close()
 
 
