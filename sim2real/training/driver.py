@@ -107,7 +107,7 @@ def _use_cpu_cores():
 # Keys that may differ between a run's saved config and the one it is resumed with: they change
 # how long it runs and what it reports, not what it computes.
 RESUMABLE_KEYS = ("total_steps", "max_chunks", "checkpoint_every", "keep_checkpoints", "tensorboard", "progress",
-                  "resume", "overwrite")
+                  "resume", "overwrite", "logger", "wandb_mode", "wandb_project")
 
 
 def validate(cfg: TrainConfig) -> None:
@@ -119,6 +119,12 @@ def validate(cfg: TrainConfig) -> None:
             raise config_lib.ConfigError(f"{key}={getattr(cfg, key)}: must be a positive integer")
     if cfg.max_chunks < 0:
         raise config_lib.ConfigError(f"max_chunks={cfg.max_chunks}: must be >= 0 (0: run to the end)")
+    if cfg.logger == "wandb":
+        try:
+            import wandb  # noqa: F401
+        except ImportError:
+            raise config_lib.ConfigError("logger=wandb needs the wandb package (pip install wandb); "
+                                         "sim2real does not install it") from None
     if cfg.resume and cfg.overwrite:
         raise config_lib.ConfigError("resume=true and overwrite=true contradict each other; choose one")
     from sim2real.rl.ppo import check

@@ -80,6 +80,11 @@ class TrainConfig:
       overwrite: delete an existing run folder instead of refusing to start.
       max_chunks: stop after this many chunks in this invocation (0: run to the end).
       tensorboard: also write TensorBoard event files.
+      logger: ``wandb``: also log to Weights & Biases (the ``wandb`` package, not installed by
+        sim2real: ``pip install wandb``), the run's config as its config, the seed means per chunk.
+      wandb_mode: ``offline`` (default: files under ``<run>/wandb``, ``wandb sync`` uploads them
+        later), ``online`` or ``disabled``.
+      wandb_project: the W&B project.
       progress: draw a progress bar.
       ppo: PPO settings.
       dr: domain-randomisation box.
@@ -102,6 +107,9 @@ class TrainConfig:
     overwrite: bool = False
     max_chunks: int = 0
     tensorboard: bool = True
+    logger: Literal["none", "wandb"] = "none"
+    wandb_mode: Literal["offline", "online", "disabled"] = "offline"
+    wandb_project: str = "sim2real"
     progress: bool = True
     ppo: PPOConfig = PPOConfig()
     dr: DRConfig = DRConfig()
@@ -211,6 +219,13 @@ class MetricsLogger:
             self.tb.add_text("config", "```yaml\n" + yaml.safe_dump(to_dict(cfg), sort_keys=False) + "```",
                              resume_from_update * steps_per_update)
         self.last = {}
+        self.wandb = None
+        if cfg.logger == "wandb":
+            import wandb
+
+            from sim2real.common.config import to_dict
+            self.wandb = wandb.init(project=cfg.wandb_project, name=cfg.name, dir=run.dir, mode=cfg.wandb_mode,
+                                    config=to_dict(cfg), id=f"{cfg.name}-{os.path.basename(run.dir)}", resume="allow")
         self.t_start = time.time()
 
     def hparams(self) -> dict:
@@ -265,6 +280,10 @@ class MetricsLogger:
                     self.last[n] = float(np.nanmean(last))
             self.tb.add_scalar("steps_per_second", k * self.per_update * cfg.num_seeds / seconds,
                                u * self.per_update)
+        if self.wandb is not None:
+            last = {n: float(np.nanmean(metrics[n][:, -1])) for n in names if np.isfinite(metrics[n][:, -1]).any()}
+            self.wandb.log({**last, "steps_per_second": k * self.per_update * cfg.num_seeds / seconds},
+                           step=(chunk_index + 1) * k * self.per_update)
 
     def _write_arrays(self, arrays: dict):
         """Array-valued metrics (e.g. LSDR's distribution) -> ``arrays.npz``, ``[seed, update, ...]``."""
@@ -275,6 +294,8 @@ class MetricsLogger:
         os.replace(tmp, self.arrays_path)
 
     def close(self):
+        if self.wandb is not None:
+            self.wandb.finish()
         if self.tb is not None:
             # the settings against the last logged metrics (seed means), one row per run
             metrics = {f"hparam/{k}": v for k, v in self.last.items() if k in ("episode_return", "fitness_mean")}
