@@ -67,6 +67,55 @@ def test_parquet_recording_loads_like_the_csv_and_names_its_problems(tmp_path):
         load(str(tmp_path / "text.parquet"), _model())
 
 
+JOINT_STATE = """std_msgs/Header header
+string[] name
+float64[] position
+float64[] velocity
+float64[] effort
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+"""
+
+
+def _write_mcap(path, t, cols, command_stamps=None):
+    from mcap_ros2.writer import Writer
+
+    with open(path, "wb") as f:
+        w = Writer(f)
+        schema = w.register_msgdef("sensor_msgs/msg/JointState", JOINT_STATE)
+        for topic, stamps, name, fields in (("/joint_states", t, "hinge", {"position": cols["qpos:hinge"]}),
+                                            ("/joint_commands", command_stamps if command_stamps is not None else t,
+                                             "motor", {"effort": cols["ctrl:motor"]})):
+            for i, ti in enumerate(stamps):
+                sec = int(np.floor(ti))
+                msg = {"header": {"stamp": {"sec": sec, "nanosec": int(round((ti - sec) * 1e9))}, "frame_id": ""},
+                       "name": [name], "position": [], "velocity": [], "effort": []}
+                msg.update({k: [float(v[i])] for k, v in fields.items()})
+                w.write_message(topic, schema, msg, log_time=int(ti * 1e9), publish_time=int(ti * 1e9))
+        w.finish()
+
+
+def test_mcap_joint_states_load_like_the_csv(tmp_path):
+    pytest.importorskip("mcap_ros2")
+    t, cols = _good()
+    t = t + 1.7e9  # ROS wall-clock stamps: the time need not start at 0
+    save_csv(str(tmp_path / "ok.csv"), t - t[0], cols)
+    _write_mcap(str(tmp_path / "ok.mcap"), t, cols)
+    a, b = load(str(tmp_path / "ok.csv"), _model()), load(str(tmp_path / "ok.mcap"), _model())
+    np.testing.assert_allclose(b.get("qpos", "hinge"), a.get("qpos", "hinge"), atol=1e-8)
+    np.testing.assert_allclose(b.get("ctrl", "motor"), a.get("ctrl", "motor"), atol=1e-8)
+    assert b.dt == pytest.approx(0.01, rel=1e-5)
+    _write_mcap(str(tmp_path / "skew.mcap"), t, cols, command_stamps=t + 0.003)
+    with pytest.raises(RecordingError, match="skew.mcap: topic '/joint_commands' is not stamped at the instants"):
+        load(str(tmp_path / "skew.mcap"), _model())
+
+
 @pytest.mark.parametrize("case,match", [
     ("no_time", "no 'time' column"),
     ("unknown_joint", "column 'qpos:elbow' names joint 'elbow'.*model joints: hinge"),

@@ -14,7 +14,7 @@ column                 meaning
 =====================  ===========================================================
 
 CSV (header row), NPZ (arrays named like the columns), Parquet (numeric columns named like the
-columns; pyarrow) and MATLAB ``.mat`` (variables named like the columns with ``:`` written as
+columns; pyarrow), MCAP (ROS 2 ``sensor_msgs/JointState``: :func:`_read_mcap`) and MATLAB ``.mat`` (variables named like the columns with ``:`` written as
 ``__``, e.g. ``qpos__axis``) are read. Every problem raises
 :class:`RecordingError` naming the file and the column or row.
 """
@@ -143,8 +143,56 @@ def _read_parquet(path: str) -> dict[str, np.ndarray]:
     return out
 
 
+def _read_mcap(path: str) -> dict[str, np.ndarray]:
+    """MCAP of ROS 2 ``sensor_msgs/msg/JointState`` messages (mcap, mcap-ros2-support).
+
+    A topic whose name contains ``command`` carries the commands: ``ctrl:<name>`` from each
+    message's ``effort`` (its ``position`` where ``effort`` is empty), one name per actuator. Every
+    other JointState topic carries the measurements: ``qpos:<name>``, ``qvel:<name>`` where
+    ``velocity`` is filled, ``force:<name>`` where ``effort`` is (name the joints like the model's,
+    efforts like its actuators). ``time`` is each message's header stamp in seconds; every topic
+    must have been stamped at the same instants (one row per instant)."""
+    try:
+        from mcap_ros2.reader import read_ros2_messages
+    except ImportError:
+        raise RecordingError(f"{path}: reading MCAP needs mcap and mcap-ros2-support "
+                             "(pip install mcap mcap-ros2-support)") from None
+    topics: dict[str, dict] = {}
+    for m in read_ros2_messages(path):
+        if m.schema is None or m.schema.name != "sensor_msgs/msg/JointState":
+            continue
+        msg, topic = m.ros_msg, m.channel.topic
+        t = topics.setdefault(topic, {"time": [], "cols": {}})
+        command = "command" in topic
+        n = len(t["time"])
+        t["time"].append(msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec)
+        fields = ([("ctrl", msg.effort if len(msg.effort) else msg.position)] if command else
+                  [("qpos", msg.position), ("qvel", msg.velocity), ("force", msg.effort)])
+        for kind, values in fields:
+            if not len(values):
+                continue
+            if len(values) != len(msg.name):
+                raise RecordingError(f"{path}: topic '{topic}' message {n}: {len(msg.name)} names but "
+                                     f"{len(values)} values of {kind}")
+            for name, v in zip(msg.name, values):
+                t["cols"].setdefault(f"{kind}:{name}", []).append(float(v))
+    if not topics:
+        raise RecordingError(f"{path}: no sensor_msgs/msg/JointState messages")
+    (first, ref), *others = topics.items()
+    out = {"time": np.asarray(ref["time"])}
+    for topic, t in topics.items():
+        if len(t["time"]) != len(out["time"]) or not np.allclose(t["time"], out["time"], rtol=0, atol=1e-9):
+            raise RecordingError(f"{path}: topic '{topic}' is not stamped at the instants of '{first}' "
+                                 f"({len(t['time'])} vs {len(out['time'])} messages); resample to one clock first")
+        for col, values in t["cols"].items():
+            if len(values) != len(t["time"]):
+                raise RecordingError(f"{path}: topic '{topic}': column '{col}' is missing in some messages")
+            out[col] = np.asarray(values, np.float64)
+    return out
+
+
 # one reader per format; a new format is one function here (and its test)
-READERS = {".csv": _read_csv, ".npz": _read_npz, ".mat": _read_mat, ".parquet": _read_parquet}
+READERS = {".csv": _read_csv, ".npz": _read_npz, ".mat": _read_mat, ".parquet": _read_parquet, ".mcap": _read_mcap}
 
 
 def _read_table(path: str) -> dict[str, np.ndarray]:
