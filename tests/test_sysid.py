@@ -212,8 +212,12 @@ def test_emps_hardware_diagnosis(tmp_path):
     offset = fc * p.get("coulomb_asym:axis", 0.0)  # the constant force offset during motion
     assert offset == pytest.approx(emps.REFERENCE["offset"], rel=0.3)
     assert d["fit"]["reduction"] >= 0.3
-    for f in ("diagnosis.json", "report.md", "fitted.xml", "overlay.png", ".sim2real"):
+    for f in ("diagnosis.json", "report.md", "report.html", "fitted.xml", "overlay.png", ".sim2real"):
         assert (out / f).exists(), f
+    # the HTML page stands alone: every figure of report.md embedded, none linked
+    page, md = (out / "report.html").read_text(), (out / "report.md").read_text()
+    assert page.count("data:image/png;base64,") == md.count("](") == len(d["figures"]) > 0
+    assert "<code>coulomb:axis</code>" in page and "95% interval" in page and 'src="overlay.png"' not in page
     fitted = mujoco.MjModel.from_xml_path(str(out / "fitted.xml"))
     assert fitted.dof_frictionloss[0] == pytest.approx(fc, rel=1e-4)
     assert fitted.body_mass[1] == pytest.approx(d["fitted_params"]["mass:carriage"], rel=1e-4)

@@ -481,6 +481,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
                                 invdyn_rows=(res0, invdyn.residual(system, z_fit, trajs[: len(train)], rows)))
     d["figures"] = list(images.values())
     report.markdown(os.path.join(out, "report.md"), d, images)
+    report.html_page(os.path.join(out, "report.html"), d, images)
     with open(os.path.join(out, "diagnosis.json"), "w") as f:
         json.dump(d, f, indent=2, default=_json_default)
     return d

@@ -177,58 +177,128 @@ def _fmt(v):
     return "" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.4g}"
 
 
-def markdown(path: str, d: dict, images: dict[str, str]) -> None:
+def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
+    """The report's content once, as blocks both writers render: ``("h1"|"h2"|"h3"|"p", text)``,
+    ``("table", header, rows)``, ``("list", items)``, ``("img", title, file)``. Text may hold
+    ``**bold**`` and ``code`` spans."""
     fit = d["fit"]
-    L = [f"# Diagnosis of `{os.path.basename(d['model'])}`", ""]
+    B = [("h1", f"Diagnosis of `{os.path.basename(d['model'])}`")]
     if d["answer"] == "effects":
-        L.append("**Missing physics found:** " + ", ".join(
-            f"`{s['effect']}`" + (f" at `{s['target']}`" if s["target"] else "") for s in d["selected"]) + ".")
+        B.append(("p", "**Missing physics found:** " + ", ".join(
+            f"`{s['effect']}`" + (f" at `{s['target']}`" if s["target"] else "") for s in d["selected"]) + "."))
     elif d["answer"] == "none":
-        L.append("**No missing effect found**: the nominal model (re-fitted parameters below) predicts the data "
-                 "as well as any candidate.")
+        B.append(("p", "**No missing effect found**: the nominal model (re-fitted parameters below) predicts the data "
+                       "as well as any candidate."))
     else:
-        L.append("**Inconclusive**: effects improved the training recordings but not the held-out ones (notes).")
-    L.append("")
+        B.append(("p", "**Inconclusive**: effects improved the training recordings but not the held-out ones (notes)."))
+
+    def ci(v, sd):  # a 95% interval from the fit's standard deviation, where it has one
+        return "" if sd is None or not np.isfinite(sd) else f"[{v - 1.96 * sd:.4g}, {v + 1.96 * sd:.4g}]"
+
     for s in d["selected"]:
-        L += [f"### `{s['effect']}`" + (f" at `{s['target']}`" if s["target"] else ""), "",
-              f"Validation error x{s['validation_ratio']:.3f} of the model before it (paired t = {s['t']:.1f}).", "",
-              "| parameter | value | std | unit |", "|---|---|---|---|"]
+        B += [("h3", f"`{s['effect']}`" + (f" at `{s['target']}`" if s["target"] else "")),
+              ("p", f"Validation error x{s['validation_ratio']:.3f} of the model before it (paired t = {s['t']:.1f}; "
+                    "lower is better).")]
+        rows = []
         for k, v in s["params"].items():
-            L.append(f"| `{k}` | {v:.6g} | {_fmt(s['std'].get(k))} | {s.get('units', {}).get(k, 's' if k.endswith('seconds') else '')} |")
+            sd = s["std"].get(k)
+            rows.append([f"`{k}`", f"{v:.6g}", _fmt(sd), ci(v, sd),
+                         s.get("units", {}).get(k, "s" if k.endswith("seconds") else "")])
+        B.append(("table", ["parameter", "value", "std", "95% interval", "unit"], rows))
         if s.get("note"):
-            L.append(f"\n{s['note']}")
-        L.append("")
-    L += ["## Fit on held-out data", "",
-          f"Normalised RMSE of {fit['metric']}, mean over signals: **{fit['before']:.4g} -> {fit['after']:.4g}** "
-          f"({fit['change']}), on {', '.join(fit['recordings'])}.", "",
-          "| signal | before | after |", "|---|---|---|"]
-    for s, v in fit["per_signal"].items():
-        L.append(f"| {s} | {v['before']:.4g} | {v['after']:.4g} |")
-    L += ["", "## Steps", "", "| model | training objective | validation objective | held-out NRMSE | kept |", "|---|---|---|---|---|"]
-    for s in d["steps"]:
-        L.append(f"| {s['model']} | {s['objective']:.4g} | {s['validation']:.4g} | {s['heldout_nrmse']:.4g} | "
-                 f"{'yes' if s['kept'] else 'no'} |")
-    L += ["", "## Nominal parameters re-fitted", "", "| parameter | nominal | fitted | std | unit |", "|---|---|---|---|---|"]
-    for n, v in d["nominal_refit"].items():
-        L.append(f"| `{n}` | {v['nominal']:.6g} | {v['fitted']:.6g} | {_fmt(v['std'])} | {v['unit']} |")
+            B.append(("p", s["note"]))
+    B += [("h2", "Fit on held-out data"),
+          ("p", f"Normalised RMSE of {fit['metric']}, mean over signals: **{fit['before']:.4g} -> {fit['after']:.4g}** "
+                f"({fit['change']}), on {', '.join(fit['recordings'])}."),
+          ("table", ["signal", "before", "after"],
+           [[sig, f"{v['before']:.4g}", f"{v['after']:.4g}"] for sig, v in fit["per_signal"].items()])]
+    B += [("h2", "Steps"), ("table", ["model", "training objective", "validation objective", "held-out NRMSE", "kept"],
+                             [[s["model"], f"{s['objective']:.4g}", f"{s['validation']:.4g}", f"{s['heldout_nrmse']:.4g}",
+                               "yes" if s["kept"] else "no"] for s in d["steps"]])]
+    B += [("h2", "Nominal parameters re-fitted"),
+          ("table", ["parameter", "nominal", "fitted", "std", "95% interval", "unit"],
+           [[f"`{n}`", f"{v['nominal']:.6g}", f"{v['fitted']:.6g}", _fmt(v["std"]), ci(v["fitted"], v["std"]), v["unit"]]
+            for n, v in d["nominal_refit"].items()])]
     if d["notes"]:
-        L += ["", "## Notes", ""] + [f"- {n}" for n in d["notes"]]
-    L += ["", f"Fitted MJCF: `{d['fitted_mjcf']}`" if d["fitted_mjcf"] else "Fitted MJCF: not written (notes).", ""]
-    L += ["## Where the nominal model is wrong", "", "| signal | NRMSE | offset ratio |", "|---|---|---|"]
-    for s, v in d["mismatch"]["signals"].items():
-        L.append(f"| {s} | {v['nrmse']:.4g} | {v['offset_ratio']:.2f} |")
-    L += ["", "Worst segments:", ""]
-    for w in d["mismatch"]["worst_windows"][:5]:
-        L.append(f"- {w['recording']} {w['t_start']:.2f}-{w['t_end']:.2f} s, {w['signal']}: NRMSE {w['nrmse']:.3g}")
-    L += ["", "## Candidates (first round)", "",
-          "Screen score: linearised drop of the training objective on top of the nominal re-fit; the best were "
-          "fitted and judged on the validation segments (ratio to the model before; lower is better).", "",
-          "| effect | target | screen score | validation ratio | t | named |", "|---|---|---|---|---|---|"]
-    for r in d["effects"]:
-        L.append(f"| {r['effect']} | {r['target']} | {r['screen_score']:.4f} | {_fmt(r.get('validation_ratio'))} | "
-                 f"{_fmt(r.get('t'))} | {'yes' if r.get('passed') else ''} |")
-    L.append("")
+        B += [("h2", "Notes"), ("list", list(d["notes"]))]
+    B.append(("p", f"Fitted MJCF: `{d['fitted_mjcf']}`" if d["fitted_mjcf"] else "Fitted MJCF: not written (notes)."))
+    B += [("h2", "Where the nominal model is wrong"),
+          ("table", ["signal", "NRMSE", "offset ratio"],
+           [[sig, f"{v['nrmse']:.4g}", f"{v['offset_ratio']:.2f}"] for sig, v in d["mismatch"]["signals"].items()]),
+          ("p", "Worst segments:"),
+          ("list", [f"{w['recording']} {w['t_start']:.2f}-{w['t_end']:.2f} s, {w['signal']}: NRMSE {w['nrmse']:.3g}"
+                    for w in d["mismatch"]["worst_windows"][:5]])]
+    B += [("h2", "Candidates (first round)"),
+          ("p", "Screen score: linearised drop of the training objective on top of the nominal re-fit; the best were "
+                "fitted and judged on the validation segments (ratio to the model before; lower is better)."),
+          ("table", ["effect", "target", "screen score", "validation ratio", "t", "named"],
+           [[r["effect"], r["target"], f"{r['screen_score']:.4f}", _fmt(r.get("validation_ratio")), _fmt(r.get("t")),
+             "yes" if r.get("passed") else ""] for r in d["effects"]])]
     for title, img in images.items():
-        L += [f"## {title}", "", f"![{title}]({img})", ""]
+        B += [("h2", title), ("img", title, img)]
+    return B
+
+
+def markdown(path: str, d: dict, images: dict[str, str]) -> None:
+    """``report.md`` (figures linked by relative path)."""
+    L = []
+    for b in blocks(d, images):
+        kind = b[0]
+        if kind in ("h1", "h2", "h3"):
+            L += ["#" * int(kind[1]) + " " + b[1], ""]
+        elif kind == "p":
+            L += [b[1], ""]
+        elif kind == "table":
+            L += ["| " + " | ".join(b[1]) + " |", "|" + "---|" * len(b[1])]
+            L += ["| " + " | ".join(map(str, r)) + " |" for r in b[2]] + [""]
+        elif kind == "list":
+            L += [f"- {x}" for x in b[1]] + [""]
+        elif kind == "img":
+            L += [f"![{b[1]}]({b[2]})", ""]
     with open(path, "w") as f:
         f.write("\n".join(L))
+
+
+def _inline(text: str) -> str:
+    import html
+    import re
+
+    t = html.escape(text)
+    t = re.sub(r"\*\*(.+?)\*\*", r"<b>\1</b>", t)
+    return re.sub(r"`(.+?)`", r"<code>\1</code>", t)
+
+
+def html_page(path: str, d: dict, images: dict[str, str]) -> None:
+    """``report.html``: the same content as one self-contained page, figures embedded (base64), so
+    it can be mailed or attached without its folder."""
+    import base64
+    import html
+
+    folder = os.path.dirname(path)
+    H = []
+    for b in blocks(d, images):
+        kind = b[0]
+        if kind in ("h1", "h2", "h3", "p"):
+            H.append(f"<{kind}>{_inline(b[1])}</{kind}>")
+        elif kind == "table":
+            H.append("<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in b[1]) + "</tr>"
+                     + "".join("<tr>" + "".join(f"<td>{_inline(str(c))}</td>" for c in r) + "</tr>" for r in b[2])
+                     + "</table>")
+        elif kind == "list":
+            H.append("<ul>" + "".join(f"<li>{_inline(x)}</li>" for x in b[1]) + "</ul>")
+        elif kind == "img":
+            file = os.path.join(folder, b[2])
+            if os.path.exists(file):
+                with open(file, "rb") as f:
+                    data = base64.b64encode(f.read()).decode()
+                H.append(f'<figure><img alt="{html.escape(b[1])}" src="data:image/png;base64,{data}"></figure>')
+            else:
+                H.append(f"<p>(figure {html.escape(b[2])} not drawn)</p>")
+    style = ("body{font-family:system-ui,sans-serif;max-width:1000px;margin:2em auto;padding:0 1em;color:#222}"
+             "table{border-collapse:collapse;margin:.5em 0 1em}td,th{border:1px solid #ccc;padding:3px 8px;"
+             "text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}"
+             "code{background:#f4f4f4;padding:0 3px}img{max-width:100%}")
+    title = html.escape(f"Diagnosis of {os.path.basename(d['model'])}")
+    with open(path, "w") as f:
+        f.write(f"<!doctype html><html><head><meta charset='utf-8'><title>{title}</title><style>{style}</style>"
+                f"</head><body>{''.join(H)}</body></html>\n")
