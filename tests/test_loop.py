@@ -247,3 +247,25 @@ def test_wandb_logger_gets_the_config_and_the_curves_offline(tmp_path, monkeypat
     with pytest.raises(config_lib.ConfigError, match="logger=wandb needs the wandb package"):
         train(tiny(tmp_path, "name=wb2", "logger=wandb"))
     assert not (tmp_path / "wb2").exists()
+
+
+def test_render_draws_the_nominal_and_the_box_corners_side_by_side(tmp_path):
+    from PIL import Image
+
+    from sim2real.tools import render
+
+    try:
+        render.gl_backend()
+    except RuntimeError as e:  # no EGL nor OSMesa on this machine: nothing to render with
+        pytest.skip(str(e))
+    run = train(tiny(tmp_path, "name=dr", "dr.params=[mass:pole]", "dr.low=[0.5]", "dr.high=[1.5]"))["run_dir"]
+    out = tmp_path / "v.gif"
+    _script("render").main([f"run={run}", f"out={out}", "steps=12", "width=64", "height=48"])
+    gif = Image.open(out)
+    assert gif.size == (3 * 64, 48) and gif.n_frames == 13       # three panels, the first state + 12 steps
+    frame = np.asarray(gif.convert("RGB"))
+    assert not np.array_equal(frame[:, :64], frame[:, 64:128])    # the panels differ (labels, physics)
+    with pytest.raises(FileExistsError, match="overwrite=true"):
+        _script("render").main([f"run={run}", f"out={out}"])
+    with pytest.raises(config_lib.ConfigError, match="a .gif or .mp4"):
+        _script("render").main([f"run={run}", f"out={tmp_path / 'v.avi'}"])

@@ -1,9 +1,9 @@
 """The command line: one module per command (``train``, ``evaluate``, ``diagnose``, ``record``,
-``loop``), each a ``main(argv)`` and a ``run()`` console entry point (``sim2real-<command>``, or
+``loop``, ``render``), each a ``main(argv)`` and a ``run()`` console entry point (``sim2real-<command>``, or
 ``python -m sim2real <command> key=value ...``). ``scripts/<command>.py`` call the same code."""
 from __future__ import annotations
 
-COMMANDS = ("train", "evaluate", "diagnose", "record", "loop")
+COMMANDS = ("train", "evaluate", "diagnose", "record", "loop", "render")
 __all__ = list(COMMANDS)
 
 
