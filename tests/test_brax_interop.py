@@ -43,6 +43,7 @@ def test_wrapping_is_refused_with_brax_randomization_or_another_env():
         BraxEnv("pendulum", physics={"mass:nothing": (0.5, 2.0)})
 
 
+@pytest.mark.slow  # ~1 min on 2 cores, mostly Brax's compilation (make test-slow)
 def test_brax_ppo_trains_on_a_sim2real_env_unchanged():
     from brax.training.agents.ppo import train as ppo
 

@@ -191,11 +191,17 @@ def test_one_loop_iteration_end_to_end(tmp_path):
     assert os.path.exists(out / "iter_1" / "run" / "policy.msgpack")
 
 
-def test_evaluation_holds_the_box_centre_names_its_folder_by_axes_and_keeps_every_seed(tmp_path):
+@pytest.fixture(scope="module")
+def dr_run(tmp_path_factory):
+    """A tiny 2-seed run with a 2-D DR box (shared: each training costs a compilation)."""
+    return train(tiny(tmp_path_factory.mktemp("dr"), "name=dr", "num_seeds=2", "dr.params=[mass:pole,coulomb:hinge]",
+                      "dr.low=[0.5,0.0]", "dr.high=[1.5,0.2]"))["run_dir"]
+
+
+def test_evaluation_holds_the_box_centre_names_its_folder_by_axes_and_keeps_every_seed(dr_run):
     from sim2real.tools.evaluate import EvaluateConfig, evaluate_run
 
-    run = train(tiny(tmp_path, "name=dr", "num_seeds=2", "dr.params=[mass:pole,coulomb:hinge]",
-                     "dr.low=[0.5,0.0]", "dr.high=[1.5,0.2]"))["run_dir"]
+    run = dr_run
     res = evaluate_run(EvaluateConfig(run=run, x="mass:pole=0.5,1.5", episodes=1, progress=False))
     env = make("pendulum")
     assert res["held"] == {"coulomb:hinge": pytest.approx(0.1)}          # not the env default, 0
@@ -207,19 +213,11 @@ def test_evaluation_holds_the_box_centre_names_its_folder_by_axes_and_keeps_ever
     assert res["std"].shape == (2,) and np.all(res["std"] >= 0)
 
 
-def test_tensorboard_gets_the_config_as_text_and_the_settings_as_hparams(tmp_path):
+def test_loggers_tensorboard_text_and_hparams_and_wandb_offline(tmp_path, monkeypatch):
+    """TensorBoard gets the resolved config as text and the settings as hparams; logger=wandb goes
+    through a stand-in ``wandb`` module (the package is not a dependency): what sim2real hands it;
+    and a clear error, before any folder exists, when it is missing."""
     import glob
-
-    train(tiny(tmp_path, "name=tb", "tensorboard=true", "ppo.lr=0.00123"))
-    blobs = b"".join(open(p, "rb").read() for p in glob.glob(str(tmp_path / "tb" / "tb" / "**" / "events.*"),
-                                                             recursive=True))
-    assert b"lr: 0.00123" in blobs                        # the resolved config, as text
-    assert b"hparam/episode_return" in blobs and b"ppo.lr" in blobs and b"ppo.net.hidden" in blobs
-
-
-def test_wandb_logger_gets_the_config_and_the_curves_offline(tmp_path, monkeypatch):
-    """logger=wandb through a stand-in ``wandb`` module (the package is not a dependency): what
-    sim2real hands it; and a clear error, before any folder exists, when it is missing."""
     import sys
     import types
 
@@ -235,7 +233,11 @@ def test_wandb_logger_gets_the_config_and_the_curves_offline(tmp_path, monkeypat
     fake = types.ModuleType("wandb")
     fake.init = lambda **kw: calls["init"].append(kw) or FakeRun()
     monkeypatch.setitem(sys.modules, "wandb", fake)
-    train(tiny(tmp_path, "name=wb", "logger=wandb"))
+    train(tiny(tmp_path, "name=wb", "logger=wandb", "tensorboard=true", "ppo.lr=0.00123"))
+    blobs = b"".join(open(p, "rb").read() for p in glob.glob(str(tmp_path / "wb" / "tb" / "**" / "events.*"),
+                                                             recursive=True))
+    assert b"lr: 0.00123" in blobs                        # the resolved config, as text
+    assert b"hparam/episode_return" in blobs and b"ppo.lr" in blobs and b"ppo.net.hidden" in blobs
     (kw,) = calls["init"]
     assert kw["mode"] == "offline" and kw["project"] == "sim2real" and kw["config"]["ppo"]["num_envs"] == 8
     assert kw["dir"] == str(tmp_path / "wb")
@@ -249,7 +251,7 @@ def test_wandb_logger_gets_the_config_and_the_curves_offline(tmp_path, monkeypat
     assert not (tmp_path / "wb2").exists()
 
 
-def test_render_draws_the_nominal_and_the_box_corners_side_by_side(tmp_path):
+def test_render_draws_the_nominal_and_the_box_corners_side_by_side(tmp_path, dr_run):
     from PIL import Image
 
     from sim2real.tools import render
@@ -258,7 +260,7 @@ def test_render_draws_the_nominal_and_the_box_corners_side_by_side(tmp_path):
         render.gl_backend()
     except RuntimeError as e:  # no EGL nor OSMesa on this machine: nothing to render with
         pytest.skip(str(e))
-    run = train(tiny(tmp_path, "name=dr", "dr.params=[mass:pole]", "dr.low=[0.5]", "dr.high=[1.5]"))["run_dir"]
+    run = dr_run
     out = tmp_path / "v.gif"
     _script("render").main([f"run={run}", f"out={out}", "steps=12", "width=64", "height=48"])
     gif = Image.open(out)
