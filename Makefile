@@ -13,6 +13,9 @@ $(STAMP): pyproject.toml constraints-cpu.txt
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -c constraints-cpu.txt -e ".[dev]"
+	# MuJoCo Playground for the interop tests, without its warp-lang dependency (149 MB, MJX's
+	# GPU backend: sim2real runs MJX's JAX implementation, and Playground tasks are loaded with it)
+	$(PY) -m pip install -q --no-deps -c constraints-cpu.txt playground
 	touch $(STAMP)
 
 demo: setup

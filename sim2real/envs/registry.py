@@ -2,7 +2,8 @@
 
 An env is found by its ``name``: every module of ``sim2real.envs`` is imported on the first lookup
 and each ``Env`` subclass that sets its own ``name`` is registered, so adding an env is its
-module (plus its test), not a line here.
+module (plus its test), not a line here. ``playground:<Task>`` names a MuJoCo Playground task
+(``sim2real/interop/playground.py``).
 """
 from __future__ import annotations
 
@@ -32,6 +33,10 @@ def _load_all() -> dict[str, type[Env]]:
 
 
 def env_class(name: str) -> type[Env]:
+    from sim2real.interop import playground
+
+    if playground.is_playground(name):  # a MuJoCo Playground task, read into a ParamSpec
+        return playground.env_class(name)
     envs = _load_all()
     if name not in envs:
         raise UnknownNameError(unknown_name_message("env", name, sorted(envs)))

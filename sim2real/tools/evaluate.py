@@ -166,5 +166,5 @@ def evaluate_run(cfg: EvaluateConfig) -> dict:
                     + ("; held at the training box's centre: " + ", ".join(f"{n}={v:.3g}" for n, v in held.items())
                        if held else "") + "; other physics at the run's fixed values")
         heatmap(axes, ret, os.path.join(tmp, "returns.png"), title=title, box=box, spread=spread, subtitle=subtitle)
-    return {"out": out, "names": names, "z": zs, "returns": ret, "std": spread, "held": held,
+    return {"out": out, "names": names, "z": zs, "returns": ret, "std": spread, "per_seed": per_seed, "held": held,
             "before": np.mean(before, 0).reshape(shape) if cfg.adapt else None}
