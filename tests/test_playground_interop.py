@@ -15,7 +15,7 @@ NAME = "playground:CheetahRun"
 
 @pytest.fixture(scope="module")
 def env():
-    return make(NAME, episode_length=6)
+    return make(NAME, episode_length=6, reset_pool=8)
 
 
 def test_the_tasks_model_becomes_the_parameter_spec(env):
@@ -78,6 +78,8 @@ def test_unknown_tasks_and_the_tasks_own_timing_are_refused():
         make("playground:CheetahRnu")
     with pytest.raises(ValueError, match="frame_skip"):
         make(NAME, frame_skip=2)
+    with pytest.raises(ValueError, match="reset_pool"):
+        make(NAME, reset_pool=0)
 
 
 @pytest.mark.slow
@@ -96,3 +98,17 @@ def test_lsdr_trains_on_a_playground_task(tmp_path):
 
     rows = list(csv.DictReader(open(os.path.join(res["run_dir"], "metrics.csv"))))
     assert len(rows) == 16 and np.isfinite(float(rows[-1]["dist_eval_return"]))
+
+
+@pytest.mark.slow  # compiles the task's settling reset once more (~40 s on 2 cores)
+def test_an_auto_reset_starts_from_the_tasks_own_settled_states(env):
+    """Auto-resets draw from the pool of the task's resets (computed once, nominal physics) with
+    fresh keys, so an episode boundary costs no settling; the new physics acts from the first step."""
+    z = jnp.asarray(env.z_of(obs_noise=0.0))
+    a, b = env.auto_reset(jax.random.PRNGKey(3), z), env.auto_reset(jax.random.PRNGKey(4), z)
+    pool = np.asarray(env.pool().data.qpos)
+    assert pool.shape[0] == 8 and len(np.unique(pool[:, 3])) == 8
+    for s in (a, b):
+        assert np.any(np.all(np.isclose(pool, np.asarray(s.data.qpos)), axis=1))
+        np.testing.assert_allclose(np.asarray(s.obs), np.asarray(s.inner_obs))
+    assert not np.array_equal(np.asarray(a.key), np.asarray(b.key))

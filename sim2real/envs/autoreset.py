@@ -55,7 +55,7 @@ def step_autoreset(env: Env, state: State, z: jax.Array, action: jax.Array, key:
     done = nxt.terminated | nxt.truncated
     k_z, k_reset = jax.random.split(key)
     z_new = sample(k_z)
-    fresh = env.reset(k_reset, z_new)
+    fresh = env.auto_reset(k_reset, z_new)
     tr = Transition(obs=state.obs, action=action, reward=nxt.reward, next_obs=nxt.obs,
                     terminated=nxt.terminated, truncated=nxt.truncated, z=z,
                     diverged=nxt.metrics["diverged"])

@@ -184,6 +184,12 @@ class Env:
             metrics={k: zero for k in self.metric_names + ("diverged",)},
         )
 
+    def auto_reset(self, key: jax.Array, z: jax.Array) -> State:
+        """The reset an auto-reset computes at *every* step for every env (``envs/autoreset.py``)
+        and keeps where an episode ended: ``reset`` here, because it is cheap. An env whose reset
+        is expensive (a Playground task settles for 200 physics steps) overrides it."""
+        return self.reset(key, z)
+
     def step(self, state: State, action: jax.Array, z: jax.Array) -> State:
         """Advance one control step (``frame_skip`` physics steps) under physics ``z [P]``."""
         valid = self.spec_valid(z)

@@ -9,6 +9,14 @@ EPOpt, ADR, DORAEMON, SimOpt and ES-MAML train on it like on a bundled env: the 
 How the physics reaches the task: Playground's ``reset``/``step`` read the model from
 ``self.mjx_model``, so each call runs on a shallow copy of the task whose ``_mjx_model`` is
 ``PhysicsModel.apply(z)``. The task's reward, termination and observation are its own, unchanged.
+Auto-resets: Playground tasks settle their robot in ``reset`` (CheetahRun: 200 physics steps), and
+sim2real's auto-reset computes a reset at every step for every env (``envs/autoreset.py``), which
+would make each step ~200 times dearer. So an episode that *auto*-resets starts from one of
+``reset_pool`` initial states (``make(name, reset_pool=N)``, default ``RESET_POOL``) of the task's
+own reset computed once, on the nominal physics, at the first auto-reset, with its fresh physics ``z`` acting from its first step (Brax's auto-reset
+likewise restarts from a stored first state). ``reset`` itself (the start of a rollout, every
+evaluation episode) is the task's reset on the episode's own physics.
+
 The action passes through sim2real's command path (the delay line) before the task sees it; effects
 that act inside the physics substeps (Coulomb friction, motor lag, backlash) are not declared here,
 because the task steps its substeps itself.
@@ -33,6 +41,7 @@ from sim2real.physics import catalog
 from sim2real.physics.params import Param, clip
 
 PREFIX = "playground:"
+RESET_POOL = 256  # initial states an auto-reset draws from
 
 
 @struct.dataclass
@@ -90,7 +99,10 @@ class PlaygroundEnv(Env):
     task: str = ""
     _prototype: Any = None
 
-    def __init__(self, config: EnvConfig | None = None, **overrides):
+    def __init__(self, config: EnvConfig | None = None, reset_pool: int = RESET_POOL, **overrides):
+        if not (isinstance(reset_pool, int) and reset_pool >= 1):
+            raise ValueError(f"env '{self.name}': reset_pool={reset_pool!r}; a positive integer")
+        self.reset_pool, self._pool = reset_pool, None
         for k in ("frame_skip", "timestep"):
             if k in overrides:
                 raise ValueError(f"env '{self.name}': env_options.{k} is the Playground task's own "
@@ -162,6 +174,23 @@ class PlaygroundEnv(Env):
             truncated=jnp.zeros((), bool), effects=self.effects.init_state(), t=jnp.zeros((), jnp.int32),
             goal=jnp.zeros((0,)), key=k_next, metrics=self._metrics(s.metrics, zero), info=s.info,
             inner_obs=s.obs)
+
+    def pool(self) -> PlaygroundState:
+        """``[reset_pool]`` initial states of the task's reset on the nominal physics (made once)."""
+        if self._pool is None:
+            with jax.ensure_compile_time_eval():  # concrete even when first asked inside a trace
+                keys = jax.random.split(jax.random.PRNGKey(0), self.reset_pool)
+                self._pool = jax.jit(jax.vmap(self.reset, in_axes=(0, None)))(keys, jnp.asarray(self.default_z()))
+        return self._pool
+
+    def auto_reset(self, key: jax.Array, z: jax.Array) -> PlaygroundState:
+        """A pooled initial state (nominal physics settled it) with fresh keys and observation noise."""
+        z = clip(self.spec, z)
+        k_pick, k_task, k_sense, k_next = jax.random.split(key, 4)
+        pool = self.pool()
+        s = jax.tree_util.tree_map(lambda x: x[jax.random.randint(k_pick, (), 0, self.reset_pool)], pool)
+        info = dict(s.info, rng=k_task) if isinstance(s.info, dict) and "rng" in s.info else s.info
+        return s.replace(obs=self._noisy(z, s.inner_obs, k_sense), key=k_next, info=info)
 
     def step(self, state: PlaygroundState, action: jax.Array, z: jax.Array) -> PlaygroundState:
         """One control step of the task under physics ``z [P]``; diverged physics as in ``Env.step``."""
