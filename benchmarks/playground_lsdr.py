@@ -4,7 +4,7 @@
     python benchmarks/playground_lsdr.py total_steps=1e6    # a smaller run
 
 The task is dm_control suite's CheetahRun from the ``playground`` package, brought into sim2real by
-``sim2real/interop/playground.py`` (its MjModel read into a ParamSpec; its reward and observation
+``sim2real/envs/playground.py`` (its MjModel read into a ParamSpec; its reward and observation
 its own). Both methods train ``configs/playground_cheetah_lsdr.yaml``'s budget over its prior box of
 torso mass x floor friction x joint-damping multiplier: ``lsdr`` learns a Gaussian inside it,
 ``udr`` samples it uniformly. Each run is then evaluated over torso mass x friction (damping at

@@ -3,7 +3,7 @@
 An env is found by its ``name``: every module of ``sim2real.envs`` is imported on the first lookup
 and each ``Env`` subclass that sets its own ``name`` is registered, so adding an env is its
 module (plus its test), not a line here. ``playground:<Task>`` names a MuJoCo Playground task
-(``sim2real/interop/playground.py``).
+(``sim2real/envs/playground.py``).
 """
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ def _load_all() -> dict[str, type[Env]]:
 
 
 def env_class(name: str) -> type[Env]:
-    from sim2real.interop import playground
+    from sim2real.envs import playground
 
     if playground.is_playground(name):  # a MuJoCo Playground task, read into a ParamSpec
         return playground.env_class(name)
