@@ -216,11 +216,28 @@ def test_emps_hardware_diagnosis(tmp_path):
         assert (out / f).exists(), f
     # the HTML page stands alone: every figure of report.md embedded, none linked
     page, md = (out / "report.html").read_text(), (out / "report.md").read_text()
-    assert page.count("data:image/png;base64,") == md.count("](") == len(d["figures"]) > 0
+    assert page.count("data:image/") == md.count("](") == len(d["figures"]) > 0
     assert "<code>coulomb:axis</code>" in page and "95% interval" in page and 'src="overlay.png"' not in page
+    # the estimates' correlation (symmetric, unit diagonal) and a figure of it; the regime table
+    # holds the fitted model's residual beside the nominal's (the chart compares the two)
+    c = np.array(d["correlation"]["matrix"], float)
+    assert d["correlation"]["names"] == list(d["correlation"]["names"]) and c.shape == (len(c), len(c)) and len(c) >= 2
+    assert np.allclose(c, c.T) and np.allclose(np.diag(c), 1.0) and "correlation.png" in d["figures"]
+    regimes = [r for r in d["mismatch"]["regimes"]["axis"].values() if r["rms"] is not None]
+    assert regimes and all("rms_fitted" in r for r in regimes)
+    # the held-out window animated, wherever there is headless OpenGL to draw it with
+    gif = "heldout.gif" in d["figures"]
+    assert gif or any("heldout.gif was not drawn" in n for n in d["notes"])
+    if gif:
+        assert "data:image/gif;base64," in page
     fitted = mujoco.MjModel.from_xml_path(str(out / "fitted.xml"))
     assert fitted.dof_frictionloss[0] == pytest.approx(fc, rel=1e-4)
     assert fitted.body_mass[1] == pytest.approx(d["fitted_params"]["mass:carriage"], rel=1e-4)
+    # the asymmetry as a constant force MuJoCo simulates: a bias-only actuator after the model's own
+    bias = mujoco.mj_name2id(fitted, mujoco.mjtObj.mjOBJ_ACTUATOR, "sim2real_friction_offset:axis")
+    assert bias == fitted.nu - 1 and fitted.actuator_gainprm[bias, 0] == 0.0
+    assert fitted.actuator_biasprm[bias, 0] == pytest.approx(-offset, rel=1e-4)
+    assert "written as a constant force" in (out / "fitted.xml").read_text()
 
 
 # --------------------------------------------------------------------------------------------
@@ -321,3 +338,40 @@ def test_an_effect_fitted_at_its_absent_value_is_not_an_effect():
     assert coul.is_off(0.0) and coul.is_off(1e-5) and not coul.is_off(0.01)
     sat = Candidate("actuator_saturation", "m", ("saturation:m",), ((1.0,),), (1.0,), ((0.1, 10.0),))
     assert sat.is_off(9.9) and not sat.is_off(5.0)
+
+
+# --------------------------------------------------------------------------------------------
+# fitted.xml: what MuJoCo can simulate is written in its terms, the rest is named in a comment
+
+def test_fitted_mjcf_simulates_what_mujoco_can_and_says_what_it_cannot(tmp_path):
+    from sim2real.sysid.export import write_fitted_mjcf
+    from sim2real.sysid.system import System
+
+    xml = os.path.join(ASSETS, "pendulum.xml")
+    system = System(xml, dt=0.01)
+    fitted = {"action_delay": 2.5, "coulomb:hinge": 0.2, "coulomb_asym:hinge": 0.25, "sensor_offset:hinge": 0.05}
+    z = system.spec.vector(fitted)
+    write_fitted_mjcf(xml, system, z, fitted, str(tmp_path / "fitted.xml"))
+    text = (tmp_path / "fitted.xml").read_text()
+    m = mujoco.MjModel.from_xml_path(str(tmp_path / "fitted.xml"))
+    motor = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "motor")
+    assert m.actuator_delay[motor] == pytest.approx(0.025)  # 2.5 samples of 10 ms
+    bias = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "sim2real_friction_offset:hinge")
+    assert bias == m.nu - 1 and m.actuator_biasprm[bias, 0] == pytest.approx(-0.25 * 0.2)
+    # the sensor offset has no MuJoCo attribute: named in the comment, kept as <numeric>
+    comment = text[text.index("<!--"): text.index("-->")]
+    assert "NOT simulated" in comment and "sensor_offset:hinge" in comment
+    assert "action_delay" in comment.split("NOT simulated")[0]  # written natively
+    assert 'name="sim2real:sensor_offset:hinge"' in text
+    # the delay acts: a step command reaches the joint 25 ms later (zero gravity, nothing else moves it)
+    m.opt.gravity[:] = 0.0
+    m.dof_frictionloss[:] = 0.0
+    m.actuator_biasprm[bias, 0] = 0.0
+    d = mujoco.MjData(m)
+    force = []
+    for _ in range(int(round(0.05 / m.opt.timestep))):
+        d.ctrl[motor] = 1.0
+        mujoco.mj_step(m, d)
+        force.append(d.actuator_force[motor])
+    t_first = (np.argmax(np.abs(np.asarray(force)) > 1e-9) + 1) * m.opt.timestep
+    assert 0.02 <= t_first <= 0.035

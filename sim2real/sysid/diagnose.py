@@ -66,6 +66,9 @@ class DiagnoseConfig:
       tie_tolerance: fitted alternatives whose validation error is within this fraction of the
         selected effect's are reported as indistinguishable from it.
       plots: draw the figures of the report.
+      animation: with ``plots``, also a GIF of a held-out window: the measured motion beside the
+        nominal and the fitted model's predictions (MuJoCo's offscreen renderer; skipped, with a
+        note, where no headless OpenGL is found).
       progress: show progress.
     """
 
@@ -89,6 +92,7 @@ class DiagnoseConfig:
     max_effects: int = SelectConfig.max_effects
     tie_tolerance: float = 0.01
     plots: bool = True
+    animation: bool = True
     progress: bool = True
 
     def check(self) -> None:
@@ -452,7 +456,8 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     # (the nominal model's inverse-dynamics residual serves the mismatch table and the plots)
     rows = invdyn.rows(trajs[: len(train)])
     res0 = invdyn.residual(system, z0, trajs[: len(train)], rows)
-    mismatch = _locate(system, sh, pred0, res0)
+    res_fit = invdyn.residual(system, z_fit, trajs[: len(train)], rows)
+    mismatch = _locate(system, sh, pred0, res0, res_fit)
     fitted_params = {n: float(z_fit[spec.index(n)]) for n in system.nominal}
     for c in chosen.effects:
         fitted_params.update({n: float(z_fit[spec.index(n)]) for n in c.params})
@@ -472,19 +477,30 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         "answer": answer, "selected": selected,
         "effects": rounds[0]["candidates"] if rounds else [], "rounds": rounds, "steps": step_rows,
         "indistinguishable": indistinguishable, "nominal_refit": nominal_refit, "unidentified": unidentified,
+        "correlation": _correlation(chosen.result),
         "mismatch": mismatch, "fit": fit, "fitted_params": fitted_params, "fitted_mjcf": fitted_mjcf,
         "notes": notes, "seconds": round(time.time() - t_start, 1), "simulator_calls": sh.calls,
     }
     images = {}
     if cfg.plots:
         images = report.figures(d, system, sh, check_tiles, pred_b, pred_a, trajs, len(train), out,
-                                invdyn_rows=(res0, invdyn.residual(system, z_fit, trajs[: len(train)], rows)))
+                                invdyn_rows=(res0, res_fit), animation=cfg.animation)
     d["figures"] = list(images.values())
     report.markdown(os.path.join(out, "report.md"), d, images)
     report.html_page(os.path.join(out, "report.html"), d, images)
     with open(os.path.join(out, "diagnosis.json"), "w") as f:
         json.dump(d, f, indent=2, default=_json_default)
     return d
+
+
+def _correlation(result) -> dict:
+    """``{"names", "matrix"}``: the correlation of the chosen model's fitted parameters (None where
+    a parameter was not identified)."""
+    if result.corr is None:
+        return {"names": [], "matrix": []}
+    c = np.asarray(result.corr, float)
+    return {"names": list(result.names),
+            "matrix": [[round(float(x), 4) if np.isfinite(x) else None for x in row] for row in c]}
 
 
 def _json_default(x):
@@ -495,10 +511,11 @@ def _json_default(x):
     return str(x)
 
 
-def _locate(system, sh, pred, res) -> dict:
+def _locate(system, sh, pred, res, res_fit) -> dict:
     """Per-signal prediction error of the nominal model, its worst windows, and the inverse-dynamics
     residual per regime and joint (``locate.py``). ``pred``: the nominal model's predictions of the
-    training segments (fit, then validation); ``res``: its inverse-dynamics residual."""
+    training segments (fit, then validation); ``res``, ``res_fit``: the nominal and the fitted
+    model's inverse-dynamics residuals (the regimes are the nominal's)."""
     tiles = np.concatenate([sh.tiles.of("fit"), sh.tiles.of("val")])
     names = _signal_names(sh)
     out = {"signals": {}, "worst_windows": [], "regimes": {}, "residual_offset_ratio": {}}
@@ -529,6 +546,6 @@ def _locate(system, sh, pred, res) -> dict:
             ctrl = res["ctrl"][:, a]
         masks = locate.regimes(res["v"][:, dof], res["a"][:, dof], res["act"][:, dof], lim,
                                ctrl if ctrl is not None else np.zeros(len(res["v"])), bounds, 5)
-        out["regimes"][jn] = locate.regime_table(res["r"][:, dof], masks)
+        out["regimes"][jn] = locate.regime_table(res["r"][:, dof], masks, fitted=res_fit["r"][:, dof])
         out["residual_offset_ratio"][jn] = locate.offset_ratio(res["r"][:, dof])
     return out

@@ -40,6 +40,8 @@ class Result:
       phi: objective on the fitted segments; sse: its data part; n: residual count.
       unidentified: combinations the data cannot determine, ``[{name: weight}]`` (held at start).
       iterations: Gauss-Newton iterations run.
+      corr: ``[len(names), len(names)]`` correlation of the fitted parameters' estimates (NaN
+        where a parameter is not identified); None when nothing was fitted.
     """
 
     z: np.ndarray
@@ -51,6 +53,7 @@ class Result:
     n: int
     unidentified: list
     iterations: int
+    corr: np.ndarray | None = None
 
 
 class Fitter:
@@ -207,17 +210,21 @@ class Fitter:
         # standard errors in parameter units from the reduced Gauss-Newton matrix
         std = {}
         unidentified = []
+        corr = None
         if len(names):
             w, V, keep = self._identifiable(H, sigma2)
             winv = np.where(keep, 1.0 / np.maximum(w, 1e-300), 0.0)
             cov = (V * winv) @ V.T * sigma2
             for k, nm in enumerate(names):
                 std[nm] = float(np.sqrt(max(cov[k, k], 0.0)) * scale[k]) if keep.any() else float("nan")
+            sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                corr = np.where(np.outer(sd, sd) > 0, cov / np.outer(sd, sd), np.nan)
             for i in np.where(~keep)[0]:
                 vec = V[:, i]
                 big = np.argsort(-np.abs(vec))[:4]
                 unidentified.append({names[j]: round(float(vec[j]), 3) for j in big if abs(vec[j]) > 0.2})
-        return Result(z, v0, list(names), std, phi, float(np.sum(r0**2)), int(r0.size), unidentified, it)
+        return Result(z, v0, list(names), std, phi, float(np.sum(r0**2)), int(r0.size), unidentified, it, corr)
 
     def _velocity_only(self, v0, solve_v, p, tiles):
         vv = v0.copy()

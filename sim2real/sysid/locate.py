@@ -53,8 +53,11 @@ def _near(events: np.ndarray, w: int) -> np.ndarray:
     return np.convolve(e, k, mode="same") > 0
 
 
-def regime_table(residual: np.ndarray, masks: dict[str, np.ndarray], min_fraction: float = 0.01) -> dict:
-    """Per regime: fraction of samples, RMS, and excess (RMS in regime / RMS overall)."""
+def regime_table(residual: np.ndarray, masks: dict[str, np.ndarray], min_fraction: float = 0.01,
+                 fitted: np.ndarray | None = None) -> dict:
+    """Per regime: fraction of samples, RMS, and excess (RMS in regime / RMS overall); with
+    ``fitted`` (the fitted model's residual on the same samples) also its RMS there, ``rms_fitted``.
+    A regime with fewer than ``min_fraction`` of the samples gets None: its RMS says little."""
     total = float(np.sqrt(np.mean(residual**2))) + 1e-300
     out = {}
     for name, m in masks.items():
@@ -64,6 +67,8 @@ def regime_table(residual: np.ndarray, masks: dict[str, np.ndarray], min_fractio
             continue
         rms = float(np.sqrt(np.mean(residual[m] ** 2)))
         out[name] = {"fraction": round(frac, 4), "rms": rms, "excess": round(rms / total, 3)}
+        if fitted is not None:
+            out[name]["rms_fitted"] = float(np.sqrt(np.mean(fitted[m] ** 2)))
     return out
 
 

@@ -118,25 +118,113 @@ def residual_vs_velocity(path, v, before, after, joint, unit_force, unit_vel):
     plt.close(fig)
 
 
-def regimes_plot(path, regimes: dict, title: str):
-    """Residual RMS in each regime relative to overall, per joint (1 = no concentration)."""
-    fig, ax = plt.subplots(figsize=(6.5, 3.2))
-    names = sorted({k for t in regimes.values() for k in t})
-    width = 0.8 / max(len(regimes), 1)
-    for i, (joint, t) in enumerate(regimes.items()):
-        vals = [t.get(n, {}).get("excess") or 0.0 for n in names]
-        ax.bar(np.arange(len(names)) + i * width, vals, width, label=joint)
-    ax.axhline(1.0, color="gray", lw=0.8)
-    ax.set_xticks(np.arange(len(names)) + width * (len(regimes) - 1) / 2, names, rotation=20, fontsize=7, ha="right")
-    ax.set_ylabel("residual RMS in regime / overall")
-    ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7)
+def regimes_plot(path, regimes: dict, units: dict[str, str]):
+    """Inverse-dynamics residual RMS per motion regime, one panel per joint, nominal vs fitted
+    model, in the joint's force unit (lower is better). Absolute RMS rather than ratios: a ratio to
+    the overall RMS makes a joint whose residual is tiny everywhere look as wrong as one whose
+    residual is large; the dashed line is the nominal model's overall RMS for reference."""
+    joints = list(regimes)[:6]
+    fig, axes = plt.subplots(1, len(joints), figsize=(max(3.4 * len(joints) + 0.6, 6.0), 3.6), squeeze=False)
+    for ax, joint in zip(axes[0], joints):
+        t = {n: r for n, r in regimes[joint].items() if r.get("rms") is not None}
+        names = list(t)
+        x = np.arange(len(names))
+        nom = [t[n]["rms"] for n in names]
+        fit = [t[n].get("rms_fitted", np.nan) for n in names]
+        ax.bar(x - 0.2, nom, 0.4, color="C3", label="nominal model")
+        ax.bar(x + 0.2, fit, 0.4, color="C0", label="fitted model")
+        overall = [r["rms"] / r["excess"] for r in t.values() if r.get("excess")]
+        if overall:
+            ax.axhline(overall[0], color="C3", ls="--", lw=0.8, label="nominal, all samples")
+        ax.set_xticks(x, [f"{n.replace('_', ' ')}\n{100 * t[n]['fraction']:.0f}% of samples" for n in names],
+                      rotation=30, fontsize=6.5, ha="right")
+        top = max([v for v in nom + fit if np.isfinite(v)] + [overall[0] if overall else 0.0, 1e-12])
+        ax.set_ylim(0, 1.35 * top)  # room for the legend above the bars
+        ax.set_ylabel(f"residual RMS [{units.get(joint, '')}]", fontsize=8)
+        ax.set_title(joint, fontsize=9)
+        ax.tick_params(labelsize=7)
+    axes[0, 0].legend(fontsize=6.5, ncol=2, loc="upper center")
+    fig.suptitle("inverse-dynamics residual by motion regime (RMS; lower is better)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_rows) -> dict[str, str]:
+def correlation_plot(path, names: list[str], matrix: list[list]):
+    """The fitted parameters' correlation matrix (|r| near 1: the data trade one for the other)."""
+    c = np.array([[np.nan if x is None else x for x in row] for row in matrix], float)
+    n = len(names)
+    fig, ax = plt.subplots(figsize=(2.8 + 0.55 * n, 1.9 + 0.45 * n))
+    im = ax.imshow(c, cmap="RdBu_r", vmin=-1, vmax=1)
+    for i in range(n):
+        for j in range(n):
+            if np.isfinite(c[i, j]):
+                ax.text(j, i, f"{c[i, j]:.2f}", ha="center", va="center", fontsize=6.5,
+                        color="white" if abs(c[i, j]) > 0.6 else "black")
+    ax.set_xticks(range(n), names, rotation=60, ha="right", fontsize=7)
+    ax.set_yticks(range(n), names, fontsize=7)
+    fig.colorbar(im, ax=ax, fraction=0.04, label="correlation")
+    ax.set_title("correlation of the fitted parameters' estimates", fontsize=9)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+
+
+def heldout_animation(path, system, sh, tiles, pred_b, pred_a, traj_index, seconds: float = 5.0,
+                      fps: float = 20.0, width: int = 240, height: int = 180) -> str:
+    """A GIF of held-out segments, one after another: the measured motion beside the nominal and the
+    fitted model's predictions (each prediction starts from the measured state at its segment's
+    start, as the fit scores it; a cut between segments is a jump). At most ``seconds`` of them, in
+    real time. Returns what it shows, in words."""
+    import mujoco
+
+    from sim2real.tools.render import frames, gl_backend, write_video
+
+    gl_backend()
+    tr = sh.trajs[traj_index]
+    joints = list(system.joints)
+    qb = np.stack([_stitch(sh, pred_b, tiles, "qpos", k, traj_index) for k in range(len(joints))], 1)
+    qa = np.stack([_stitch(sh, pred_a, tiles, "qpos", k, traj_index) for k in range(len(joints))], 1)
+    step = max(int(round(1.0 / (fps * tr.dt))), 1)  # samples per frame
+    offset = sum(len(t) for t in sh.trajs[:traj_index])
+    starts = sorted(int(sh.tiles.start[s] - offset) + 1 for s in tiles if sh.tiles.traj[s] == traj_index)
+    idx, budget = [], int(seconds / tr.dt)
+    for st in starts:
+        seg = [i for i in range(st, min(st + sh.H, len(tr)), step) if np.isfinite(qa[i]).all() and np.isfinite(qb[i]).all()]
+        idx += seg[: max(budget - step * len(idx), 0) // step]
+    idx = np.asarray(idx)
+    if len(idx) < 2:
+        raise ValueError("no held-out predictions to animate")
+    m = system.mj
+    adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)] for j in joints]
+
+    def poses(q):
+        out = np.tile(m.qpos0, (len(idx), 1))
+        out[:, adr] = q[idx]
+        return out
+
+    slide = [m.jnt_type[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)] == mujoco.mjtJoint.mjJNT_SLIDE
+             for j in joints]
+
+    def captions(q):  # time, and the worst joint's distance from the measured pose
+        out = []
+        for i in idx:
+            e = np.abs(q[i] - tr.q[i])
+            k = int(np.argmax(e))
+            out.append(f"t = {tr.time[i]:.2f} s" + ("" if q is tr.q else
+                       f", {joints[k]} off by {e[k] * 1e3:.3g} {'mm' if slide[k] else 'mrad'}"))
+        return out
+
+    meas = poses(tr.q)
+    panels = [frames(m, meas, width, height, "measured", captions=captions(tr.q))]
+    panels += [frames(m, poses(q), width, height, f"{label} (ghost: measured)", ghost=meas, captions=captions(q))
+               for q, label in ((qb, "nominal model"), (qa, "fitted model"))]
+    write_video(path, np.concatenate(panels, axis=2), 1.0 / (tr.dt * step))
+    n = len({st for st in starts for i in idx if st <= i < st + sh.H})
+    return f"{tr.name}: {n} segments of {sh.H * tr.dt:.3g} s, real time"
+
+
+def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_rows,
+            animation: bool = True) -> dict[str, str]:
     from sim2real.sysid.diagnose import _signal_names
 
     names = _signal_names(sh)
@@ -145,6 +233,7 @@ def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_ro
         slide = system.mj.jnt_type[j] == 2
         units[f"qpos:{jn}"] = "m" if slide else "rad"
         units[f"qvel:{jn}"] = "m/s" if slide else "rad/s"
+        units[jn] = "N" if slide else "N m"
     for a, an in enumerate(system.actuators):
         slide = system.mj.jnt_type[system.mj.actuator_trnid[a, 0]] == 2
         units[f"force:{an}"] = "N" if slide else "N m"
@@ -152,11 +241,21 @@ def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_ro
     ti = int(sh.tiles.traj[tiles[0]])
     overlay(os.path.join(out, "overlay.png"), sh, tiles, pred_b, pred_a, ti, names, units)
     images["Sim vs real on held-out data"] = "overlay.png"
+    if animation:
+        try:
+            window = heldout_animation(os.path.join(out, "heldout.gif"), system, sh, tiles, pred_b, pred_a, ti)
+            images[f"Sim vs real, animated ({window})"] = "heldout.gif"
+        except Exception as e:  # noqa: BLE001  (no OpenGL here: the report goes on without it)
+            d["notes"].append(f"heldout.gif was not drawn: {type(e).__name__}: {str(e).splitlines()[0]}")
     steps_plot(os.path.join(out, "steps.png"), d["steps"])
     images["Forward selection"] = "steps.png"
     if d["effects"]:
         ranking_plot(os.path.join(out, "candidates.png"), d["effects"])
         images["Candidate screen"] = "candidates.png"
+    corr = d.get("correlation", {})
+    if len(corr.get("names", [])) >= 2:
+        correlation_plot(os.path.join(out, "correlation.png"), corr["names"], corr["matrix"])
+        images["Parameter correlation"] = "correlation.png"
     before, after = invdyn_rows
     m = system.mj
     j = int(np.argmax([np.sqrt(np.mean(before["r"][:, m.jnt_dofadr[k]] ** 2)) /
@@ -165,10 +264,9 @@ def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_ro
     dof = m.jnt_dofadr[j]
     slide = m.jnt_type[j] == 2
     residual_vs_velocity(os.path.join(out, "residual_vs_velocity.png"), before["v"][:, dof], before["r"][:, dof],
-                         after["r"][:, dof], system.joints[j], "N" if slide else "Nm", "m/s" if slide else "rad/s")
+                         after["r"][:, dof], system.joints[j], "N" if slide else "N m", "m/s" if slide else "rad/s")
     images["Residual vs velocity"] = "residual_vs_velocity.png"
-    regimes_plot(os.path.join(out, "regimes.png"), d["mismatch"]["regimes"],
-                 "where the nominal model's inverse-dynamics residual sits")
+    regimes_plot(os.path.join(out, "regimes.png"), d["mismatch"]["regimes"], units)
     images["Residual by regime"] = "regimes.png"
     return images
 
@@ -291,7 +389,8 @@ def html_page(path: str, d: dict, images: dict[str, str]) -> None:
             if os.path.exists(file):
                 with open(file, "rb") as f:
                     data = base64.b64encode(f.read()).decode()
-                H.append(f'<figure><img alt="{html.escape(b[1])}" src="data:image/png;base64,{data}"></figure>')
+                mime = "image/gif" if file.endswith(".gif") else "image/png"
+                H.append(f'<figure><img alt="{html.escape(b[1])}" src="data:{mime};base64,{data}"></figure>')
             else:
                 H.append(f"<p>(figure {html.escape(b[2])} not drawn)</p>")
     style = ("body{font-family:system-ui,sans-serif;max-width:1000px;margin:2em auto;padding:0 1em;color:#222}"

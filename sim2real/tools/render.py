@@ -111,9 +111,13 @@ def panels(cfg: RenderConfig, env, rcfg, base) -> list[tuple[str, np.ndarray]]:
     return out
 
 
-def frames(mj_model, qpos: np.ndarray, width: int, height: int, label: str) -> np.ndarray:
+def frames(mj_model, qpos: np.ndarray, width: int, height: int, label: str, ghost: np.ndarray | None = None,
+           captions: list[str] | None = None) -> np.ndarray:
     """``[T, H, W, 3]`` uint8 frames of the positions ``qpos [T, nq]`` with ``label`` written on them;
-    the camera follows the first moving body (a hopper leaves a fixed view)."""
+    the camera follows the first moving body (a hopper leaves a fixed view). ``ghost [T, nq]``: a
+    second pose drawn translucent over the first (what a prediction should have matched);
+    ``captions``: a line per frame under the label. With either, the world frame's axes are drawn
+    as a fixed reference (a slide's motion is invisible without one)."""
     import mujoco
     from PIL import Image, ImageDraw
 
@@ -121,20 +125,35 @@ def frames(mj_model, qpos: np.ndarray, width: int, height: int, label: str) -> n
     mj_model.vis.headlight.ambient[:] = 0.45
     mj_model.vis.headlight.diffuse[:] = 0.75
     data = mujoco.MjData(mj_model)
+    shadow = mujoco.MjData(mj_model)
     cam = mujoco.MjvCamera()
     mujoco.mjv_defaultFreeCamera(mj_model, cam)
     cam.distance, cam.elevation, cam.azimuth = 3.5 * mj_model.stat.extent, -10.0, 90.0  # from the side
     root = [mj_model.jnt_type[j] for j in range(mj_model.njnt) if mj_model.jnt_bodyid[j] == 1]
     if mujoco.mjtJoint.mjJNT_FREE in root or root.count(mujoco.mjtJoint.mjJNT_SLIDE) >= 2:
         cam.type, cam.trackbodyid = mujoco.mjtCamera.mjCAMERA_TRACKING, 1  # a walker travels: follow it
+    opt = mujoco.MjvOption()
+    if ghost is not None or captions is not None:
+        opt.frame = mujoco.mjtFrame.mjFRAME_WORLD
     out = np.zeros((len(qpos), height, width, 3), np.uint8)
     with mujoco.Renderer(mj_model, height, width) as r:
         for t, q in enumerate(qpos):
             data.qpos[:] = q[: mj_model.nq]
             mujoco.mj_forward(mj_model, data)
-            r.update_scene(data, camera=cam)
+            r.update_scene(data, camera=cam, scene_option=opt)
+            if ghost is not None:
+                shadow.qpos[:] = ghost[t, : mj_model.nq]
+                mujoco.mj_forward(mj_model, shadow)
+                n0 = r.scene.ngeom
+                mujoco.mjv_addGeoms(mj_model, shadow, mujoco.MjvOption(), mujoco.MjvPerturb(),
+                                    mujoco.mjtCatBit.mjCAT_DYNAMIC, r.scene)
+                for g in range(n0, r.scene.ngeom):
+                    r.scene.geoms[g].rgba[:] = (0.9, 0.9, 0.9, 0.35)
             img = Image.fromarray(r.render())
-            ImageDraw.Draw(img).text((6, 4), label, fill=(255, 255, 255))
+            draw = ImageDraw.Draw(img)
+            draw.text((6, 4), label, fill=(255, 255, 255))
+            if captions is not None:
+                draw.text((6, 16), captions[t], fill=(255, 230, 120))
             out[t] = np.asarray(img)
     return out
 

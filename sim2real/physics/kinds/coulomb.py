@@ -8,6 +8,7 @@ with no ``frictionloss`` structure in the compiled model (the MJX ``put_model`` 
 from __future__ import annotations
 
 import jax.numpy as jnp
+import mujoco
 import numpy as np
 
 from sim2real.physics.kinds.base import JOINT, Kind, add_magnitude, rows, take
@@ -45,9 +46,24 @@ class Coulomb(Kind):
         return jnp.where(level > 0, c, 0.0)
 
     def export(self, ctx, p, v) -> None:
-        # MuJoCo's frictionloss is the symmetric level; the asymmetry and Stribeck terms stay <numeric>
+        # MuJoCo's frictionloss is the symmetric level Fc. The asymmetry is a constant force: the
+        # friction -Fc(1+a) for v > 0 and +Fc(1-a) for v < 0 is -Fc sign(v) - a Fc, so -a Fc is
+        # written as an actuator whose force is its bias alone (gain 0: its ctrl does nothing),
+        # appended after the model's own (their ctrl indices unchanged). At rest the pair breaks
+        # away at Fc(1+a) one way and Fc(1-a) the other, as the fitted law does. Stribeck: <numeric>.
+        jn = ctx.system.joints[p.index]
         if p.kind == "coulomb" and (v > 0 or p.default > 0):
-            ctx.spec.joint(ctx.system.joints[p.index]).frictionloss = v
+            ctx.spec.joint(jn).frictionloss = v
+        elif p.kind == "coulomb_asym" and v != 0 and ctx.values.get(f"coulomb:{jn}", 0.0) > 0:
+            force = -v * ctx.values[f"coulomb:{jn}"]
+            a = ctx.spec.add_actuator(name=f"sim2real_friction_offset:{jn}", target=jn,
+                                      trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            a.gainprm[0] = 0.0
+            a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+            a.biasprm[:3] = [force, 0.0, 0.0]
+            ctx.native(p.name, f"a constant force {force:.6g} on {jn} (actuator '{a.name}', bias only)")
+        elif p.kind == "stribeck" and v > 0:
+            ctx.only_numeric(p.name, "MuJoCo's friction has no breakaway (Stribeck) term")
 
     def candidates(self, system, sc, add, target) -> None:
         jn = system.joints[target]

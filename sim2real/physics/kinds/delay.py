@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 
 from sim2real.physics.kinds.base import Kind
 
@@ -44,6 +45,21 @@ class ActionDelay(Kind):
 
     def command_rows(self, data):
         return [data["row"]]
+
+    def export(self, ctx, p, v) -> None:
+        # MuJoCo >= 3.4 delays an actuator's control through a history buffer of ``nsample``
+        # physics steps; ``interp="linear"`` makes a delay that is not a whole number of them exact
+        # for the zero-order-held commands the fit assumed
+        if v <= 0:
+            return
+        seconds = v * ctx.system.h * ctx.system.substeps
+        step = float(ctx.spec.option.timestep)
+        for an in ctx.system.actuators:
+            a = ctx.spec.actuator(an)
+            a.delay = float(a.delay) + seconds
+            a.nsample = max(int(a.nsample), int(np.ceil(a.delay / step)) + 2)
+            a.interp = 1
+        ctx.native(p.name, f"{seconds * 1e3:.4g} ms on every actuator (its delay, nsample, interp='linear')")
 
     def candidates(self, system, sc, add, target) -> None:
         if not system.mj.nu:

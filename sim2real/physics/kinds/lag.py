@@ -43,6 +43,8 @@ class MotorLag(Kind):
             a.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
             a.dynprm[0] = v
             a.actlimited = 0
+        elif v > 0:
+            ctx.only_numeric(p.name, "the actuator already has activation dynamics; MuJoCo takes one filter")
 
     def candidates(self, system, sc, add, target) -> None:
         an = system.actuators[target]
