@@ -213,6 +213,25 @@ def test_evaluation_holds_the_box_centre_names_its_folder_by_axes_and_keeps_ever
     assert res["std"].shape == (2,) and np.all(res["std"] >= 0)
 
 
+def test_evaluation_writes_a_video_per_grid_corner(dr_run, tmp_path):
+    from PIL import Image
+
+    from sim2real.tools import render
+    from sim2real.tools.evaluate import EvaluateConfig, evaluate_run
+
+    try:
+        render.gl_backend()
+    except RuntimeError as e:  # no EGL nor OSMesa on this machine: nothing to render with
+        pytest.skip(str(e))
+    res = evaluate_run(EvaluateConfig(run=dr_run, x="mass:pole=0.5:1.5:3", y="coulomb:hinge=0.0,0.2", episodes=1,
+                                      out=str(tmp_path / "ev"), videos=True, progress=False))
+    gifs = sorted(f for f in os.listdir(res["out"]) if f.endswith(".gif"))
+    assert gifs == sorted(["video_mass-pole=0.5__coulomb-hinge=0.gif", "video_mass-pole=0.5__coulomb-hinge=0.2.gif",
+                           "video_mass-pole=1.5__coulomb-hinge=0.gif", "video_mass-pole=1.5__coulomb-hinge=0.2.gif"])
+    frames = [np.asarray(Image.open(os.path.join(res["out"], g)).convert("RGB")) for g in gifs]
+    assert frames[0].shape == (240, 320, 3) and not np.array_equal(frames[0], frames[3])  # labels differ
+
+
 def test_loggers_tensorboard_text_and_hparams_and_wandb_offline(tmp_path, monkeypatch):
     """TensorBoard gets the resolved config as text and the settings as hparams; logger=wandb goes
     through a stand-in ``wandb`` module (the package is not a dependency): what sim2real hands it;

@@ -64,6 +64,9 @@ class EvaluateConfig:
       seed: PRNG seed of the episodes' initial states.
       adapt: adapt the policy to each cell first (ES-MAML's adaptation operator: few-shot evaluation);
         the un-adapted returns go to ``returns_before.csv``.
+      videos: also a GIF per corner of the grid (one episode of seed 0's policy under that
+        corner's physics; ``video_<name>=<value>[__<name>=<value>].gif``); needs headless
+        OpenGL (EGL or OSMesa) for MuJoCo's renderer.
       progress: draw a progress bar.
     """
 
@@ -74,6 +77,7 @@ class EvaluateConfig:
     out: str = ""
     seed: int = 123
     adapt: bool = False
+    videos: bool = False
     progress: bool = True
 
 
@@ -124,6 +128,13 @@ def evaluate_run(cfg: EvaluateConfig) -> dict:
     if cfg.adapt and not algo.adapts:
         raise config_lib.ConfigError(f"adapt=true needs an algorithm with an adaptation operator "
                                      f"(es_maml); run '{run}' trained algo '{rcfg.algo}'")
+    if cfg.videos:
+        from sim2real.tools.render import gl_backend
+
+        try:
+            gl_backend()
+        except RuntimeError as e:
+            raise config_lib.ConfigError(f"videos=true: {e}") from None
     key = jax.random.PRNGKey(cfg.seed)
     shape = [len(v) for v in axes.values()]
     n_ep = cfg.episodes
@@ -166,5 +177,30 @@ def evaluate_run(cfg: EvaluateConfig) -> dict:
                     + ("; held at the training box's centre: " + ", ".join(f"{n}={v:.3g}" for n, v in held.items())
                        if held else "") + "; other physics at the run's fixed values")
         heatmap(axes, ret, os.path.join(tmp, "returns.png"), title=title, box=box, spread=spread, subtitle=subtitle)
+        if cfg.videos:
+            corner_videos(env, algo, all_params, all_stats, base, axes, tmp, key)
     return {"out": out, "names": names, "z": zs, "returns": ret, "std": spread, "per_seed": per_seed, "held": held,
             "before": np.mean(before, 0).reshape(shape) if cfg.adapt else None}
+
+
+def corner_videos(env, algo, all_params, all_stats, base, axes: dict[str, np.ndarray], out: str, key) -> list[str]:
+    """One GIF per corner of the grid (the first and last value of every axis), seed 0's policy,
+    one episode; returns the files written into ``out``."""
+    import itertools
+
+    from sim2real.tools.record import policy
+    from sim2real.tools.render import policy_frames, write_video
+
+    params, stats = jax.tree_util.tree_map(lambda x: x[0], (all_params, all_stats))
+    act = policy(env, algo.ppo, params, stats, base)
+    files = []
+    for corner in itertools.product(*[sorted({float(v[0]), float(v[-1])}) for v in axes.values()]):
+        z = np.asarray(base, np.float32).copy()
+        for n, v in zip(axes, corner):
+            z[env.spec.index(n)] = v
+        label = ", ".join(f"{n}={v:.3g}" for n, v in zip(axes, corner))
+        video, _ = policy_frames(env, act, z, label, 1, 320, 240, key)
+        name = "video_" + "__".join(f"{n.replace(':', '-')}={v:.4g}" for n, v in zip(axes, corner)) + ".gif"
+        write_video(os.path.join(out, name), video, 1.0 / env.dt)
+        files.append(name)
+    return files

@@ -178,12 +178,22 @@ def write_video(path: str, video: np.ndarray, fps: float) -> None:
     os.replace(tmp, path)  # no half-written video under the final name
 
 
+def policy_frames(env, act, z, label: str, episodes: int, width: int, height: int, key) -> tuple[np.ndarray, np.ndarray]:
+    """``(frames [T, H, W, 3], returns [episodes])``: ``episodes`` of the policy ``act``
+    (``tools.record.policy``) in ``env`` under physics ``z``, played one after another."""
+    from sim2real.tools.record import simulated
+
+    r = simulated(env, z, act, episodes, key)
+    q = np.concatenate([r.qpos[e, : r.length[e]] for e in range(episodes)])
+    return frames(env.mj_model, q, width, height, label), r.ret
+
+
 def render_run(cfg: RenderConfig) -> dict:
     """Roll and draw; returns ``{"out", "labels", "returns" [panels, episodes], "frames"}``."""
     import jax
 
     from sim2real.common.config import ConfigError
-    from sim2real.tools.record import policy, simulated
+    from sim2real.tools.record import policy
     from sim2real.training.runs import load_policy
 
     ext = os.path.splitext(cfg.out)[1].lower()
@@ -215,10 +225,9 @@ def render_run(cfg: RenderConfig) -> dict:
         env = env.__class__(dataclasses.replace(env.config, episode_length=cfg.steps))
     videos, returns = [], []
     for label, z in todo:
-        r = simulated(env, z, act, cfg.episodes, jax.random.PRNGKey(cfg.seed))
-        q = np.concatenate([r.qpos[e, : r.length[e]] for e in range(cfg.episodes)])
-        videos.append(frames(env.mj_model, q, cfg.width, cfg.height, label))
-        returns.append(r.ret)
+        v, ret = policy_frames(env, act, z, label, cfg.episodes, cfg.width, cfg.height, jax.random.PRNGKey(cfg.seed))
+        videos.append(v)
+        returns.append(ret)
     T = max(len(v) for v in videos)  # a panel whose episode ended early holds its last frame
     video = np.concatenate([np.concatenate([v, np.repeat(v[-1:], T - len(v), 0)]) for v in videos], axis=2)
     os.makedirs(os.path.dirname(os.path.abspath(cfg.out)), exist_ok=True)
