@@ -57,6 +57,12 @@ class LSDRConfig:
       dist_start: PPO updates before the first distribution update (let the policy learn first:
         the returns of an untrained policy say little about which physics is solvable).
       ema: decay of the exponential return statistics used to standardise J.
+      min_std_fraction: the Gaussian is kept inside its box after every step: its mean within
+        ``[low, high]`` and each Cholesky diagonal entry (so each marginal standard deviation)
+        at least this fraction of the box's width. Without it, a batch whose weights favour
+        the samples near the mean can make ``Jt * log p`` grow without bound as the Gaussian
+        shrinks and leaves the box (the pendulum's closed loop: entropy -13.8 nats, KL to the
+        prior 8e19, all training resets at one corner).
       center: what J is centred by before scaling: ``ema`` (the paper: the exponentially averaged
         mean) or ``batch`` (the K returns' own mean, a REINFORCE baseline). With ``ema`` the
         batch's offset from the running mean, c, adds ``c * mean(log p_phi(z_i))`` to the
@@ -82,6 +88,7 @@ class LSDRConfig:
     dist_every: int = 1
     dist_start: int = 0
     ema: float = 0.9
+    min_std_fraction: float = 0.01
     center: str = "ema"
     eval_horizon: int = 0
     policy_optimizer: str = "ppo"
@@ -116,6 +123,8 @@ class LSDR(OuterLoop):
             raise ValueError(f"lsdr center '{cfg.center}' unknown: ema, batch")
         if cfg.policy_optimizer not in ("ppo", "epopt"):
             raise ValueError(f"lsdr policy_optimizer '{cfg.policy_optimizer}' unknown: ppo, epopt")
+        if not 0.0 < cfg.min_std_fraction < 1.0:
+            raise ValueError(f"lsdr min_std_fraction={cfg.min_std_fraction}: must be in (0, 1)")
         self.env, self.cfg, self.learn_dist = env, cfg, learn_dist
         self.space = DRSpace(env, dr)
         # the prior box: p_phi's coordinates are scaled by it (Gaussian) and samples clipped to it
@@ -245,13 +254,25 @@ class LSDR(OuterLoop):
         def step(carry, _):
             phi, opt = carry
             g = jax.grad(objective)(phi)
-            g = jax.tree_util.tree_map(lambda x: -jnp.nan_to_num(x), g)  # optax minimises
+            # optax minimises; a non-finite entry is no step (nan_to_num would turn inf into
+            # 3e38, and Adam's second moment into inf for good)
+            g = jax.tree_util.tree_map(lambda x: -jnp.where(jnp.isfinite(x), x, 0.0), g)
             if isinstance(g, binned.Binned):  # the bins are fixed: only the logits learn
                 g = g.replace(low=jnp.zeros_like(g.low), high=jnp.zeros_like(g.high))
             upd, opt = self.tx.update(g, opt, phi)
-            return (optax.apply_updates(phi, upd), opt), None
+            return (self.project(optax.apply_updates(phi, upd)), opt), None
 
         return jax.lax.scan(step, (phi, opt), None, length=cfg.grad_steps)[0]
+
+    def project(self, phi):
+        """A Gaussian back inside its box (``min_std_fraction``); binned ones are bounded already."""
+        if not isinstance(phi, gaussian.Gaussian):
+            return phi
+        lo, hi = self._box()
+        raw = phi.chol_raw
+        floor = jnp.log(self.cfg.min_std_fraction * (hi - lo))
+        raw = raw - jnp.diag(jnp.diagonal(raw)) + jnp.diag(jnp.maximum(jnp.diagonal(raw), floor))
+        return phi.replace(mean=jnp.clip(phi.mean, lo, hi), chol_raw=raw)
 
     def _box(self):
         """The prior box in distribution coordinates: ``(low [D], high [D])``."""
