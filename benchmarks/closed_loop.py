@@ -62,6 +62,16 @@ SETUPS = {
         "simopt": {"params": ["coulomb:slider", "action_delay"], "low": [0.0, 0.0], "high": [6.0, 4.0],
                    "init_std": [1.5, 1.0]},
     },
+    "hopper": {  # GPU scale: configs/hopper.yaml (4096 envs); total_steps=20_000_000 on an H100
+        "config": "configs/hopper.yaml",
+        "plant": "benchmarks/plants/hopper_real.xml",
+        # a 1.5 kg payload at the torso's centre of mass; a 40 ms first-order lag on every motor
+        "truth": {"payload:torso": 1.5, "motor_lag:thigh": 0.04, "motor_lag:leg": 0.04, "motor_lag:foot": 0.04},
+        "wide": {"payload:torso": (0.0, 3.0), "motor_lag:thigh": (0.0, 0.08), "motor_lag:leg": (0.0, 0.08),
+                 "motor_lag:foot": (0.0, 0.08), "friction": (0.5, 1.5)},
+        "simopt": {"params": ["payload:torso", "motor_lag:thigh", "motor_lag:leg", "motor_lag:foot"],
+                   "low": [0.0, 0.0, 0.0, 0.0], "high": [3.0, 0.08, 0.08, 0.08], "init_std": [0.75, 0.02, 0.02, 0.02]},
+    },
 }
 # ``lsdr`` learns its distribution inside the ``wide`` box with a plain MLP (the real plant's
 # physics is not an input a deployed policy has), from the box's centre (LSDR's Gaussian).
@@ -85,7 +95,10 @@ def _scores(run, plant, episodes, seeds, seed=12345, run_seeds=None):
 class Settings:
     """env: the task (a key of SETUPS); seeds: training seeds; episodes: evaluation episodes per policy
     on the real plant; out: results folder; work: run folders; total_steps: env steps per seed for
-    every training (the config's 1.5M leaves the oracle under-trained); methods: comma-separated."""
+    every training (the config's 1.5M leaves the oracle under-trained); methods: comma-separated;
+    only_seeds: run SimOpt and the loop for these seeds only (comma-separated; the nominal policy
+    is still trained for all, so seed s is the same chain in every call), to split a long
+    benchmark over several calls with merge=true; device: where it ran, for the summary."""
     env: str = "pendulum"
     seeds: int = 3
     episodes: int = 64
@@ -94,6 +107,8 @@ class Settings:
     total_steps: int = 4_000_000
     methods: str = "nominal,oracle,udr_wide,lsdr,simopt,diag_dr_1,diag_dr_2"
     merge: bool = False
+    only_seeds: str = ""
+    device: str = "2 CPU cores"
 
 METHODS = ("nominal", "oracle", "udr_wide", "lsdr", "simopt", "diag_dr_1", "diag_dr_2")
 
@@ -119,12 +134,16 @@ def main(args: Settings):
     if unknown:
         raise SystemExit(f"methods: unknown {unknown}; known: {', '.join(METHODS)}")
     S = args.seeds
+    per_seed = [int(x) for x in args.only_seeds.split(",") if x.strip()] or list(range(S))
+    if any(not 0 <= s < S for s in per_seed):
+        raise SystemExit(f"only_seeds={args.only_seeds}: seeds are 0..{S - 1}")
     rows, diagnoses, seconds = [], {}, {}
     if args.merge:
-        rows, diagnoses, seconds = _earlier(args, methods)
+        rows, diagnoses, seconds = _earlier(args, methods, per_seed)
 
-    def add(method, rets):
-        rows.extend({"method": method, "seed": s, "return": r} for s, r in enumerate(rets))
+    def add(method, rets, seeds=None):
+        seeds = range(len(rets)) if seeds is None else seeds
+        rows.extend({"method": method, "seed": s, "return": r} for s, r in zip(seeds, rets))
         print(f"{method:>10s}: " + ", ".join(f"{r:.1f}" for r in rets) + f"  (mean {np.mean(rets):.1f})", flush=True)
 
     needs_nominal = {"nominal", "simopt", "diag_dr_1", "diag_dr_2"} & set(methods)
@@ -162,7 +181,7 @@ def main(args: Settings):
 
     frame_skip = base.env_options.get("frame_skip", env_class(base.env).default_config.frame_skip)
     ctrl_rate = {}
-    for s in range(S):
+    for s in per_seed:
         rolls, what = from_run(nominal, plant, 3, seed=100 + s, run_seed=s, noise=1e-3)
         save(rolls, what, os.path.join(work, f"rec_nominal_{s}"))
         ctrl_rate[s] = save(rolls.every(frame_skip), what, os.path.join(work, f"rec_nominal_{s}_ctrl"))
@@ -170,7 +189,7 @@ def main(args: Settings):
         t = time.time()
         so = setup["simopt"]
         rets = []
-        for s in range(S):
+        for s in per_seed:
             paths = ctrl_rate[s]
             cfg = dataclasses.replace(
                 base, name=f"simopt_{s}", out_dir=work, seed=s, num_seeds=1, algo="simopt", updates_per_chunk=1,
@@ -180,12 +199,12 @@ def main(args: Settings):
                                   ppo_updates=100, real_rollouts=3))
             res = train(cfg)
             rets += _scores(res["run_dir"], plant, args.episodes, 1)
-        seconds["simopt"] = time.time() - t
-        add("simopt", rets)
+        seconds["simopt"] = seconds.get("simopt", 0.0) + time.time() - t
+        add("simopt", rets, per_seed)
     if "diag_dr_1" in methods or "diag_dr_2" in methods:
         t = time.time()
         r1, r2 = [], []
-        for s in range(S):
+        for s in per_seed:
             b = dataclasses.replace(base, seed=s)
             it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
                                  run_seed=s, noise=1e-3)
@@ -196,30 +215,41 @@ def main(args: Settings):
                                      seed=200 + s, noise=1e-3)
                 diagnoses[f"seed{s}_iter2"] = it2["diagnosis"]
                 r2 += _scores(it2["run"], plant, args.episodes, 1)
-        seconds["diag_dr"] = time.time() - t
-        add("diag_dr_1", r1)
+        seconds["diag_dr"] = seconds.get("diag_dr", 0.0) + time.time() - t
+        add("diag_dr_1", r1, per_seed)
         if r2:
-            add("diag_dr_2", r2)
+            add("diag_dr_2", r2, per_seed)
     write(args, setup, rows, diagnoses, seconds)
 
 
-def _earlier(args, methods):
-    """Rows, diagnoses and seconds of an earlier call for the methods this call does not run."""
+def _earlier(args, methods, per_seed):
+    """Rows, diagnoses and seconds of earlier calls, less what this call replaces: its methods
+    (for SimOpt and the loop, only at the seeds it runs)."""
     out = os.path.join(args.out, args.env)
+    seeded = {"simopt", "diag_dr_1", "diag_dr_2"}
+
+    def replaced(r):
+        return r["method"] in methods and (r["method"] not in seeded or int(r["seed"]) in per_seed)
+
     try:
         with open(os.path.join(out, "results.csv")) as f:
             rows = [dict(r, seed=int(r["seed"]), **{"return": float(r["return"])}) for r in csv.DictReader(f)
-                    if r["method"] not in methods]
+                    if not replaced(r)]
         with open(os.path.join(out, "diagnoses.json")) as f:
-            diagnoses = json.load(f) if not {"diag_dr_1", "diag_dr_2"} & set(methods) else {}
+            diagnoses = json.load(f)
     except FileNotFoundError as e:
         raise SystemExit(f"merge=true: no earlier results to merge with ({e.filename})") from None
+    if {"diag_dr_1", "diag_dr_2"} & set(methods):
+        diagnoses = {k: v for k, v in diagnoses.items() if int(k[4:].split("_")[0]) not in per_seed}
     seconds = {}
     try:
         with open(os.path.join(out, "seconds.json")) as f:
-            seconds = {k: v for k, v in json.load(f).items() if k not in methods}
+            seconds = {k: v for k, v in json.load(f).items() if k not in methods or k in ("simopt", "diag_dr")}
     except FileNotFoundError:
         pass
+    if len(per_seed) == args.seeds:  # every seed rerun: their time starts again
+        loop_methods = {"diag_dr_1", "diag_dr_2"} & set(methods)
+        seconds = {k: v for k, v in seconds.items() if not (k in methods or (k == "diag_dr" and loop_methods))}
     return rows, diagnoses, seconds
 
 
@@ -242,12 +272,12 @@ def write(args, setup, rows, diagnoses, seconds):
     nominal = np.mean(by["nominal"]) if "nominal" in by else np.nan
     lines = [f"# Closed loop on the {args.env}: returns on the real plant ({setup['plant']})", "",
              f"Truth (env parameters): {setup['truth']}. {args.episodes} episodes per policy and seed; "
-             f"{args.seeds} seeds (independent chains). CPU JAX: runs are not bit-reproducible across machines.",
+             f"{args.seeds} seeds (independent chains). {args.device}: runs are not bit-reproducible across machines.",
              "", "| method | mean | min | max | gap closed (nominal -> oracle) |", "|---|---|---|---|---|"]
     for m, v in by.items():
         gap = (np.mean(v) - nominal) / (oracle - nominal) if np.isfinite(oracle) and oracle != nominal else np.nan
         lines.append(f"| {m} | {np.mean(v):.1f} | {np.min(v):.1f} | {np.max(v):.1f} | {100 * gap:.0f}% |")
-    lines += ["", "Seconds (2 CPU cores): " + ", ".join(f"{k} {v:.0f}" for k, v in seconds.items())]
+    lines += ["", f"Seconds ({args.device}): " + ", ".join(f"{k} {v:.0f}" for k, v in seconds.items())]
     with open(os.path.join(out, "summary.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))
