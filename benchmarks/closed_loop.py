@@ -144,6 +144,7 @@ def main(args: Settings):
     def add(method, rets, seeds=None):
         seeds = range(len(rets)) if seeds is None else seeds
         rows.extend({"method": method, "seed": s, "return": r} for s, r in zip(seeds, rets))
+        write(args, setup, rows, diagnoses, seconds, quiet=True)  # each method's scores kept as they come
         print(f"{method:>10s}: " + ", ".join(f"{r:.1f}" for r in rets) + f"  (mean {np.mean(rets):.1f})", flush=True)
 
     needs_nominal = {"nominal", "simopt", "diag_dr_1", "diag_dr_2"} & set(methods)
@@ -253,7 +254,7 @@ def _earlier(args, methods, per_seed):
     return rows, diagnoses, seconds
 
 
-def write(args, setup, rows, diagnoses, seconds):
+def write(args, setup, rows, diagnoses, seconds, quiet=False):
     out = os.path.join(args.out, args.env)
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "results.csv"), "w", newline="") as f:
@@ -280,7 +281,8 @@ def write(args, setup, rows, diagnoses, seconds):
     lines += ["", f"Seconds ({args.device}): " + ", ".join(f"{k} {v:.0f}" for k, v in seconds.items())]
     with open(os.path.join(out, "summary.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    if not quiet:
+        print("\n".join(lines))
     import matplotlib
 
     matplotlib.use("Agg")
