@@ -216,11 +216,11 @@ def test_evaluation_holds_the_box_centre_names_its_folder_by_axes_and_keeps_ever
 def test_evaluation_writes_a_video_per_grid_corner(dr_run, tmp_path):
     from PIL import Image
 
-    from sim2real.tools import render
+    from sim2real.common.video import gl_backend
     from sim2real.tools.evaluate import EvaluateConfig, evaluate_run
 
     try:
-        render.gl_backend()
+        gl_backend()
     except RuntimeError as e:  # no EGL nor OSMesa on this machine: nothing to render with
         pytest.skip(str(e))
     res = evaluate_run(EvaluateConfig(run=dr_run, x="mass:pole=0.5:1.5:3", y="coulomb:hinge=0.0,0.2", episodes=1,
@@ -273,10 +273,11 @@ def test_loggers_tensorboard_text_and_hparams_and_wandb_offline(tmp_path, monkey
 def test_render_draws_the_nominal_and_the_box_corners_side_by_side(tmp_path, dr_run):
     from PIL import Image
 
+    from sim2real.common.video import gl_backend
     from sim2real.tools import render
 
     try:
-        render.gl_backend()
+        gl_backend()
     except RuntimeError as e:  # no EGL nor OSMesa on this machine: nothing to render with
         pytest.skip(str(e))
     run = dr_run

@@ -1,6 +1,6 @@
 """Plumbing every script and tool shares: typed configs (``config``), one-line errors and exit codes
 (``cli``), output folders that never touch what sim2real did not make (``output``), progress bars
-(``progress``) and headless plots (``plots``)."""
+(``progress``), headless plots (``plots``) and offscreen frames and videos (``video``)."""
 from __future__ import annotations
 
 from sim2real._lazy import exports

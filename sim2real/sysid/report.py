@@ -177,7 +177,7 @@ def heldout_animation(path, system, sh, tiles, pred_b, pred_a, traj_index, secon
     real time. Returns what it shows, in words."""
     import mujoco
 
-    from sim2real.tools.render import frames, gl_backend, write_video
+    from sim2real.common.video import frames, gl_backend, write_video
 
     gl_backend()
     tr = sh.trajs[traj_index]

@@ -129,7 +129,7 @@ def evaluate_run(cfg: EvaluateConfig) -> dict:
         raise config_lib.ConfigError(f"adapt=true needs an algorithm with an adaptation operator "
                                      f"(es_maml); run '{run}' trained algo '{rcfg.algo}'")
     if cfg.videos:
-        from sim2real.tools.render import gl_backend
+        from sim2real.common.video import gl_backend
 
         try:
             gl_backend()
@@ -189,7 +189,8 @@ def corner_videos(env, algo, all_params, all_stats, base, axes: dict[str, np.nda
     import itertools
 
     from sim2real.tools.record import policy
-    from sim2real.tools.render import policy_frames, write_video
+    from sim2real.common.video import write_video
+    from sim2real.tools.render import policy_frames
 
     params, stats = jax.tree_util.tree_map(lambda x: x[0], (all_params, all_stats))
     act = policy(env, algo.ppo, params, stats, base)
