@@ -38,6 +38,9 @@ from sim2real.sysid.fit import Fitter, Result
 # a validation segment's error is floored at this many residuals (each in units of its noise) in
 # the paired test (``Selector.judge``)
 KAPPA = 0.1
+# a re-fit that moved a nominal parameter by more than this fraction of its value is screened from
+# the nominal values too (``Selector._bases``)
+RESET_MOVE = 0.25
 
 
 @dataclasses.dataclass
@@ -86,6 +89,8 @@ class SelectConfig:
         in units of each signal's noise, at least 1% of its spread). A model already within the
         precision of the data has nothing left for an effect to explain.
       strong: a validation ratio at or below this passes whatever the misfit level.
+      floor_step: the misfit level must also exceed this many times the level the physics step
+        alone causes (``step_level``, measured per diagnosis): an effect could absorb that.
       top: candidates fitted per round; max_effects: effects named at most;
       min_score: candidates scoring less in the screen are not fitted; iters: Gauss-Newton steps.
     """
@@ -98,6 +103,7 @@ class SelectConfig:
     max_effects: int = 3
     min_score: float = 0.01
     iters: int = 6
+    floor_step: float = 0.0
 
 
 def _paired_t(d: np.ndarray) -> float:
@@ -119,8 +125,9 @@ class Selector:
     """Forward selection over ``candidates`` with ``fitter`` on the fit/validation segments."""
 
     def __init__(self, fitter: Fitter, nominal: list[str], candidates: list[Candidate], cfg: SelectConfig,
-                 progress=None):
+                 progress=None, step_level: float = 0.0):
         self.f, self.nominal, self.cands, self.cfg = fitter, list(nominal), list(candidates), cfg
+        self.step_level = float(step_level)
         sh = fitter.sh
         self.fit_tiles, self.val_tiles = sh.tiles.of("fit"), sh.tiles.of("val")
         self.spec = sh.sys.spec
@@ -184,49 +191,73 @@ class Selector:
             phi = solve(J_t)[0] if de == 0 else self._lin_phi(r + E[..., 0] * de, J_t, J_v, v0)[0]
         return phi, de
 
+    def _bases(self, M: Model) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Where candidates are screened and fitted from: ``M`` itself, and ``M`` with its nominal
+        parameters back at the model's own values (velocities: the data's estimate) when the
+        re-fit moved any of them by more than ``RESET_MOVE`` of its value. A re-fit that lacks an
+        effect can take it up with absurd values (a 25 ms lag as a 4x heavier, 40x damped
+        carriage); from there a fit of the right effect only finds a local minimum near them."""
+        bases = [(M.z, M.result.v0)]
+        idx = self.spec.indices(self.nominal)
+        moved = np.abs(M.z[idx] - self.spec.default[idx]) > RESET_MOVE * np.abs(self.spec.default[idx])
+        if moved.any():
+            z = M.z.copy()
+            z[idx] = self.spec.default[idx]
+            bases.append((z, self.f.v_hat.copy()))
+        return bases
+
     def screen(self, M: Model, cands: list[Candidate]) -> list[Trial]:
-        """Score every candidate at the current model ``M`` (see the module docstring)."""
+        """Score every candidate at the current model ``M`` (see the module docstring), from each
+        of ``_bases(M)``; a candidate keeps the base and start with the lowest linearised objective."""
         f, tiles = self.f, self.fit_tiles
-        r_M, J_t, J_v = f.jacobian(M.z, M.result.v0, M.params, tiles)
-        v0 = M.result.v0
-        base, _ = self._lin_phi(r_M, J_t, J_v, v0)
-        zs, owner = [], []
-        for ci, c in enumerate(cands):
-            for gi, g in enumerate(c.grid):
-                z = M.z.copy()
-                z[self.spec.indices(list(c.params))] = g
-                zs.append(z)
-                owner.append((ci, gi))
-        rs = f.residuals(np.stack(zs), np.repeat(v0[None], len(zs), 0), tiles) if zs else []
+        bases = self._bases(M)
+        lin = []
+        for z_b, v_b in bases:
+            r_b, J_t, J_v = f.jacobian(z_b, v_b, M.params, tiles)
+            lin.append((J_t, J_v, v_b, self._lin_phi(r_b, J_t, J_v, v_b)[0]))
+        base = lin[0][3]
+        zs, vs, owner = [], [], []
+        for bi, (z_b, v_b) in enumerate(bases):
+            for ci, c in enumerate(cands):
+                for gi, g in enumerate(c.grid):
+                    z = z_b.copy()
+                    z[self.spec.indices(list(c.params))] = g
+                    zs.append(z)
+                    vs.append(v_b)
+                    owner.append((bi, ci, gi))
+        rs = f.residuals(np.stack(zs), np.stack(vs), tiles) if zs else []
         by = {}
-        for (ci, gi), r in zip(owner, rs):
-            by.setdefault(ci, {})[gi] = r
+        for (bi, ci, gi), r in zip(owner, rs):
+            by.setdefault((bi, ci), {})[gi] = r
         trials = []
         for ci, c in enumerate(cands):
-            best = (np.inf, None)
+            best = (np.inf, None, 0)
             grid = c.grid
-            for gi, g in enumerate(grid):
-                r = by[ci][gi]
-                E, rng, now = None, None, None
-                if len(c.params) == 1 and len(grid) > 1:  # the effect's column from the nearest grid point
-                    nb = gi + 1 if gi + 1 < len(grid) else gi - 1
-                    step = grid[nb][0] - g[0]
-                    if step != 0 and np.sign(grid[nb][0]) == np.sign(g[0] or grid[nb][0]):
-                        E = ((by[ci][nb] - r) / step)[..., None]
-                        # the linear model holds between the grid neighbours only: the start stays there
-                        lo_n = grid[max(gi - 1, 0)][0]
-                        hi_n = grid[min(gi + 1, len(grid) - 1)][0]
-                        rng = (max(min(lo_n, hi_n), c.search[0][0]), min(max(lo_n, hi_n), c.search[0][1]))
-                        now = g[0]
-                phi, de = self._lin_phi(r, J_t, J_v, v0, E, rng, now)
-                if phi < best[0]:
-                    start = list(g)
-                    if de is not None:
-                        start[0] = g[0] + de
-                    best = (phi, tuple(start))
+            for bi, (J_t, J_v, v0, _) in enumerate(lin):
+                for gi, g in enumerate(grid):
+                    r = by[bi, ci][gi]
+                    E, rng, now = None, None, None
+                    if len(c.params) == 1 and len(grid) > 1:  # the effect's column from the nearest grid point
+                        nb = gi + 1 if gi + 1 < len(grid) else gi - 1
+                        step = grid[nb][0] - g[0]
+                        if step != 0 and np.sign(grid[nb][0]) == np.sign(g[0] or grid[nb][0]):
+                            E = ((by[bi, ci][nb] - r) / step)[..., None]
+                            # the linear model holds between the grid neighbours only: the start stays there
+                            lo_n = grid[max(gi - 1, 0)][0]
+                            hi_n = grid[min(gi + 1, len(grid) - 1)][0]
+                            rng = (max(min(lo_n, hi_n), c.search[0][0]), min(max(lo_n, hi_n), c.search[0][1]))
+                            now = g[0]
+                    phi, de = self._lin_phi(r, J_t, J_v, v0, E, rng, now)
+                    if phi < best[0]:
+                        start = list(g)
+                        if de is not None:
+                            start[0] = g[0] + de
+                        best = (phi, tuple(start), bi)
             score = (base - best[0]) / max(base, 1e-300)
             t = Trial(c, float(score))
             t.start = best[1]
+            t.base = bases[best[2]]
+            t.from_nominal = best[2] > 0
             trials.append(t)
         trials.sort(key=lambda t: -t.score)
         return trials
@@ -255,14 +286,16 @@ class Selector:
 
     def _passes(self, ratio, t, level=float("inf")) -> bool:
         c = self.cfg
-        return ratio <= 1 - c.min_gain and t >= c.min_t and (level > c.floor_level or ratio <= c.strong)
+        floor = max(c.floor_level, c.floor_step * self.step_level)
+        return ratio <= 1 - c.min_gain and t >= c.min_t and (level > floor or ratio <= c.strong)
 
     def _try(self, M: Model, trial: Trial) -> Trial:
         """Fit the candidate on top of ``M`` (validation comes later, batched: ``_judge_all``)."""
         c = trial.candidate
-        z0 = M.z.copy()
+        z_b, v_b = getattr(trial, "base", (M.z, M.result.v0))
+        z0 = z_b.copy()
         z0[self.spec.indices(list(c.params))] = np.clip(trial.start, [r[0] for r in c.search], [r[1] for r in c.search])
-        C = self.fit(M.effects + [c], z0, M.result.v0)
+        C = self.fit(M.effects + [c], z0, v_b)
         # a fit that ends at the edge of the searched range: widen once and fit again
         v = float(C.z[self.spec.index(c.params[0])])
         if _at_edge(c, v):

@@ -12,7 +12,8 @@ built once:
   residual is still what the noise explains (wider would cut into the motion);
 * velocities: the smoothed derivative of the positions, combined with a measured ``qvel``
   column (smoothed the same way) by inverse-variance weights, so a measured velocity counts
-  as much as its noise allows; ``sigma_v`` is the resulting standard error.
+  as much as its noise allows; ``sigma_v`` is the resulting standard error, the smoothing's
+  bias included (``smoothing_error``): a fit trusts a segment's start velocity no more than that.
 """
 from __future__ import annotations
 
@@ -156,6 +157,27 @@ def _smooth(x, w, dt, deriv):
     return savgol_filter(x, w, 3, deriv=deriv, delta=dt, axis=0, mode="interp")
 
 
+def smoothing_error(x: np.ndarray, w: int, sigma: np.ndarray, dt: float, deriv: int) -> np.ndarray:
+    """``[n]`` RMS error of the window-``w`` Savitzky-Golay estimate (``deriv``-th derivative) of
+    each column of ``x [T, n]``: its noise (``sigma``: the columns' white noise) and its bias.
+
+    A window wide enough that the *positions'* residual is only noise can still bend their
+    derivative where the motion changes fast (a PD loop's corrections, a step's onset). The bias
+    is measured against a window a third as wide (less bent): what their difference holds beyond
+    the noise the two windows leave differently is the wider one's bias (the narrow window's own,
+    smaller bias is ignored, so this errs low)."""
+    cw = savgol_coeffs(w, 3, deriv=deriv, delta=dt)
+    noise = sigma * np.sqrt(np.sum(cw**2))
+    n = max(7, (w // 3) | 1)
+    if n >= w or len(x) < w:
+        return noise
+    cn = np.zeros(w)
+    cn[(w - n) // 2: (w + n) // 2] = savgol_coeffs(n, 3, deriv=deriv, delta=dt)
+    d = _smooth(x, w, dt, deriv) - _smooth(x, n, dt, deriv)
+    bias2 = np.maximum(np.mean(d**2, 0) - sigma**2 * np.sum((cw - cn) ** 2), 0.0)
+    return np.sqrt(noise**2 + bias2)
+
+
 def from_recording(rec, system, window: int | None = None) -> Trajectory:
     """Build the trajectory of ``rec`` for ``system`` (a ``sysid.system.System`` or a
     :class:`ModelColumns`: what has ``arrays`` and ``joints``).
@@ -169,8 +191,7 @@ def from_recording(rec, system, window: int | None = None) -> Trajectory:
     w = min(w, len(qpos) - (1 - len(qpos) % 2))
     v = _smooth(qpos, w, dt, 1)
     a = _smooth(qpos, w, dt, 2)
-    d1 = savgol_coeffs(w, 3, deriv=1, delta=dt)
-    sigma_v = sigma_q * np.sqrt(np.sum(d1**2))
+    sigma_v = smoothing_error(qpos, w, sigma_q, dt, 1)
     qvel = None
     sigma_qvel = None
     if all(rec.get("qvel", j) is not None for j in system.joints):
@@ -178,8 +199,8 @@ def from_recording(rec, system, window: int | None = None) -> Trajectory:
         sigma_qvel = noise_std(qvel)
         wv = choose_window(qvel, sigma_qvel, dt)
         vm = _smooth(qvel, wv, dt, 0)
-        s_m = sigma_qvel * np.sqrt(np.sum(savgol_coeffs(wv, 3) ** 2))
-        # inverse-variance combination of the two estimates (smoothing bias ignored)
+        s_m = smoothing_error(qvel, wv, sigma_qvel, dt, 0)
+        # inverse-variance combination of the two estimates (errors: noise and smoothing bias)
         wq, wm = 1 / np.maximum(sigma_v, 1e-12) ** 2, 1 / np.maximum(s_m, 1e-12) ** 2
         v = (wq * v + wm * vm) / (wq + wm)
         sigma_v = 1 / np.sqrt(wq + wm)

@@ -145,12 +145,15 @@ def evaluate_run(cfg: EvaluateConfig) -> dict:
         return episodes(env, algo.ppo, p2, s2, z[None], k, n_ep)["return"].mean()
 
     adapted = jax.jit(jax.vmap(cell_adapted, in_axes=(None, None, 0, None)))
+    # jitted whole: run eagerly, the env's reset (a Playground task's 200 settling steps) would be
+    # dispatched op by op before the scan, minutes where the compiled call takes seconds
+    plain = jax.jit(lambda params, stats, z, k: episodes(env, algo.ppo, params, stats, z, k, n_ep)["return"])
     rets, before = [], []
     label = f"{len(zs)} physics x {n_ep} episodes" + (", adapted first" if cfg.adapt else "")
     with Bar(cfg.progress, rcfg.num_seeds * (1 + cfg.adapt), label) as bar:
         for s in range(rcfg.num_seeds):
             params, stats = jax.tree_util.tree_map(lambda x: x[s], (all_params, all_stats))
-            before.append(np.asarray(episodes(env, algo.ppo, params, stats, zs, key, n_ep)["return"]).mean(1))
+            before.append(np.asarray(plain(params, stats, jnp.asarray(zs), key)).mean(1))
             bar.step(text=f"seed {s}: evaluated")
             if cfg.adapt:
                 rets.append(np.asarray(adapted(params, stats, jnp.asarray(zs), key)))

@@ -204,7 +204,7 @@ def simulated(env: Env, z, act, episodes: int, key) -> Rollouts:
     z = jnp.asarray(env.spec.validate(z, where=f"target physics for env '{env.name}'"))
     T = env.config.episode_length
     k_reset, k_run = jax.random.split(key)
-    s0 = jax.vmap(env.reset, in_axes=(0, None))(jax.random.split(k_reset, episodes), z)
+    s0 = jax.jit(jax.vmap(env.reset, in_axes=(0, None)))(jax.random.split(k_reset, episodes), z)
     sense = jax.vmap(lambda q, k: env.effects.sense(z, q, k))
 
     @jax.jit
