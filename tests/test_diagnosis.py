@@ -118,3 +118,104 @@ def test_relative_changes_read_as_people_read_them():
 def test_design_is_hashable_for_the_case_cache():
     c = dataclasses.replace(cases.build_cases()[0])
     assert c.design == cases.build_cases()[0].design
+
+
+def test_velocity_prior_widens_only_where_the_smoothing_bends_the_motion():
+    """``smoothing_error``: a slow swing with a command step at 4 s (the acceleration jumps). Far from
+    the step a segment's start velocity is as good as its noise (and the slow swing's small bend);
+    at the step the smoothing window bends the derivative, and the error says so there only."""
+    from scipy.signal import savgol_coeffs
+
+    from sim2real.sysid.trajectory import smoothing_error
+
+    rng = np.random.default_rng(0)
+    dt = 0.002
+    t = np.arange(4000) * dt
+    q = 0.3 * np.sin(2 * np.pi * 0.5 * t) + np.where(t > 4, 2.0 * (t - 4) ** 2, 0.0)
+    x = (q + 1e-4 * rng.standard_normal(len(t)))[:, None]
+    s = noise_std(x)
+    w = choose_window(x, s, dt)
+    e = smoothing_error(x, w, s, dt, 1)[:, 0]
+    noise = s[0] * np.sqrt(np.sum(savgol_coeffs(w, 3, deriv=1, delta=dt) ** 2))
+    k = int(4 / dt)
+    assert e.min() >= noise * (1 - 1e-9)
+    assert e[500:1500].mean() < 3 * noise                        # the smooth part
+    assert e[k - 5: k + 5].max() > 10 * e[500:1500].mean()       # the step
+    assert e[k + 3 * w: k + 5 * w].mean() < 3 * noise            # and only there
+
+
+def test_an_effect_the_nominal_refit_absorbed_is_fitted_from_the_nominal_values(tmp_path):
+    """A 25 ms lag on a stiff linear-axis servo (1 kHz, 5 um encoder): without it the nominal re-fit
+    takes a 4x heavier, 40x damped carriage; a lag fitted from there stops near 8 ms. Screened and
+    fitted from the model's own values too (``Selector._bases``), it is named at its value."""
+    design = cases.Design("RK4", 0.002, "inertial", 1000.0, 8.0, "prbs", 0.0, 5e-6, True)
+    case = cases.Case(9005, "linear_axis", "single", (("motor_lag", "drive", 1),), design=design)
+    d, _ = _run(tmp_path, case)
+    assert _named(d) == [("motor_lag", "drive")]
+    assert d["selected"][0]["params"]["motor_lag:drive"] == pytest.approx(0.025, rel=0.1)
+
+
+class _Stub:
+    """What ``Selector``'s pure logic reads, without a simulator: a spec, segments, thresholds."""
+
+    def __init__(self, fits):
+        from sim2real.sysid.select import SelectConfig
+
+        self.fits = fits                # {frozenset of effect labels: (phi, per-segment validation)}
+        self.cfg = SelectConfig()
+        self.fit_tiles, self.val_tiles = np.arange(10), np.arange(10, 20)
+        self.pruned, self.step_level, self.progress = [], 0.0, lambda text: None
+
+
+def _selector(fits):
+    from sim2real.sysid.fit import Result
+    from sim2real.sysid.select import Model, Selector
+
+    sel = object.__new__(Selector)
+    sel.__dict__.update(_Stub(fits).__dict__)
+
+    def fit(effects, z0, v0, extra=()):
+        phi, val = fits[frozenset(c.label for c in effects)]
+        res = Result(np.zeros(1), np.zeros((1, 1)), [], {}, phi, phi, 1000, [], 1)
+        return Model(list(effects), res, np.asarray(val, float), [])
+
+    sel.fit = fit
+    sel.validate = lambda models: None
+    sel._without = lambda M, c: fit([e for e in M.effects if e is not c], None, None)
+    return sel, fit
+
+
+def test_backward_check_drops_an_effect_a_later_one_made_redundant():
+    """Forward selection named a stand-in (A) before the effect that explains the data (B); with B
+    in, A no longer lowers the validation error: it is dropped and the path rebuilt as none -> B."""
+    from sim2real.sysid.candidates import Candidate
+
+    A, B = (Candidate(e, "j", (f"{e}:j",), ((0.1,),), (1.0,), ((0.0, 1.0),)) for e in ("viscous_damping", "motor_lag"))
+    rng = np.random.default_rng(0)
+    good = 10 + rng.uniform(0, 1, 10)
+    fits = {frozenset(): (5000.0, 400 + 50 * rng.uniform(0, 1, 10)),
+            frozenset({"viscous_damping@j"}): (3000.0, 200 + 30 * rng.uniform(0, 1, 10)),
+            frozenset({"viscous_damping@j", "motor_lag@j"}): (1000.0, good),
+            frozenset({"motor_lag@j"}): (1001.0, good * 1.001)}
+    sel, fit = _selector(fits)
+    steps = [fit([], 0, 0), fit([A], 0, 0), fit([A, B], 0, 0)]
+    M, path = sel._prune(steps[-1], steps)
+    assert [c.label for c in M.effects] == ["motor_lag@j"]
+    assert [S.label for S in path] == ["none", "motor_lag@j"]
+    assert "viscous_damping@j was dropped" in sel.pruned[0]
+    # an effect that still carries its weight stays
+    fits[frozenset({"motor_lag@j"})] = (2000.0, good * 3)
+    sel, fit = _selector(fits)
+    M, path = sel._prune(steps[-1], steps)
+    assert [c.label for c in M.effects] == ["viscous_damping@j", "motor_lag@j"] and path is steps
+
+
+def test_no_effect_is_named_on_a_misfit_the_physics_step_can_explain():
+    """``SelectConfig.floor_step``: a model whose validation misfit (per residual) is below what the
+    physics step alone causes (``step_level``) has nothing left that an effect could be trusted
+    to explain; above it, the same gain passes."""
+    sel, _ = _selector({})
+    sel.cfg = dataclasses.replace(sel.cfg, floor_level=0.0, floor_step=1.0)
+    sel.step_level = 0.5
+    assert not sel._passes(0.5, 5.0, level=0.4)
+    assert sel._passes(0.5, 5.0, level=0.6)

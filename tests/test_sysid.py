@@ -375,3 +375,56 @@ def test_fitted_mjcf_simulates_what_mujoco_can_and_says_what_it_cannot(tmp_path)
         force.append(d.actuator_force[motor])
     t_first = (np.argmax(np.abs(np.asarray(force)) > 1e-9) + 1) * m.opt.timestep
     assert 0.02 <= t_first <= 0.035
+
+
+def test_fitted_friction_is_as_hard_in_mujoco_as_the_fitted_law(tmp_path):
+    """``fitted.xml`` writes a fitted Coulomb level as ``frictionloss`` with the hardest friction
+    MuJoCo simulates (``solreffriction`` at two physics steps): a pendulum swinging to a stop with it follows
+    ideal Coulomb friction (integrated here on its own, with stiction) far closer than MuJoCo's
+    default soft friction does."""
+    from sim2real.sysid.export import write_fitted_mjcf
+    from sim2real.sysid.system import System
+
+    xml = tmp_path / "p.xml"
+    xml.write_text(open(os.path.join(ASSETS, "pendulum.xml")).read().replace('timestep="0.01"', 'timestep="0.001"'))
+    system = System(str(xml), dt=0.01)
+    fitted = {"coulomb:hinge": 1.5}
+    write_fitted_mjcf(str(xml), system, system.spec.vector(fitted), fitted, str(tmp_path / "fitted.xml"))
+    hard = mujoco.MjModel.from_xml_path(str(tmp_path / "fitted.xml"))
+    j = mujoco.mj_name2id(hard, mujoco.mjtObj.mjOBJ_JOINT, "hinge")
+    assert hard.dof_frictionloss[j] == pytest.approx(1.5)
+    assert hard.dof_solref[j, 0] == pytest.approx(0.002)
+    soft = mujoco.MjModel.from_xml_path(str(tmp_path / "fitted.xml"))
+    soft.dof_solref[j] = (0.02, 1.0)
+
+    def swing(m):
+        d = mujoco.MjData(m)
+        d.qpos[0] = np.pi - 1.0  # a swing 1 rad either side of hanging down (qpos = 0 is upright)
+        out = []
+        for _ in range(1500):
+            mujoco.mj_step(m, d)
+            out.append(d.qpos[0])
+        return np.array(out)
+
+    # the reference: I q'' = G sin q - Fc sign(q') - b q', sticking when the load cannot break away
+    d = mujoco.MjData(hard)
+    d.qpos[0] = np.pi / 2
+    mujoco.mj_forward(hard, d)
+    M = np.zeros((1, 1))
+    mujoco.mj_fullM(hard, d, M)
+    inertia, b, G = M[0, 0], float(hard.dof_damping[j]), -float(d.qfrc_bias[0])
+    q, v, h, ref = np.pi - 1.0, 0.0, 1e-5, []
+    for k in range(1500 * 100):
+        load = G * np.sin(q) - b * v
+        if v == 0.0 and abs(load) <= 1.5:
+            a = 0.0
+        else:
+            a = (load - 1.5 * np.sign(v if v != 0.0 else load)) / inertia
+        v_new = v + h * a
+        v = 0.0 if v != 0.0 and np.sign(v_new) != np.sign(v) else v_new  # a stop is a stop
+        q += h * v
+        if (k + 1) % 100 == 0:
+            ref.append(q)
+    ref = np.array(ref)
+    err_hard, err_soft = (np.sqrt(np.mean((swing(m) - ref) ** 2)) for m in (hard, soft))
+    assert err_hard < 0.5 * err_soft

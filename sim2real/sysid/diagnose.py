@@ -60,11 +60,13 @@ class DiagnoseConfig:
       min_t: ... with a paired t-statistic over validation segments at least this large ...
       floor_level: ... on a model that misfits the validation data by more than this (its
         objective per residual, in units of each signal's noise and precision) ...
+      floor_step: ... and by more than this many times the misfit the physics step alone causes
+        (measured per diagnosis: ``discretization_level``) ...
       strong: ... unless the effect's validation ratio is this low or lower.
       top: candidates fitted in full per selection round (the best by the screen).
       max_effects: at most this many effects are named.
-      tie_tolerance: fitted alternatives whose validation error is within this fraction of the
-        selected effect's are reported as indistinguishable from it.
+      tie_tolerance: fitted alternatives that passed and whose validation error is within this
+        fraction of the selected effect's (or lower) are reported as indistinguishable from it.
       plots: draw the figures of the report.
       animation: with ``plots``, also a GIF of a held-out window: the measured motion beside the
         nominal and the fitted model's predictions (MuJoCo's offscreen renderer; skipped, with a
@@ -87,6 +89,7 @@ class DiagnoseConfig:
     min_gain: float = SelectConfig.min_gain
     min_t: float = SelectConfig.min_t
     floor_level: float = SelectConfig.floor_level
+    floor_step: float = SelectConfig.floor_step
     strong: float = SelectConfig.strong
     top: int = SelectConfig.top
     max_effects: int = SelectConfig.max_effects
@@ -102,7 +105,7 @@ class DiagnoseConfig:
         if not self.recordings:
             raise ValueError("recordings=[a.csv,...] is required")
         for key in ("window_seconds", "horizon_seconds", "coulomb_eps", "min_gain", "min_t", "tie_tolerance",
-                    "floor_level", "strong"):
+                    "floor_level", "floor_step", "strong"):
             v = getattr(self, key)
             if not math.isfinite(v) or v < 0:
                 raise ValueError(f"{key}={v}: must be a finite number >= 0")
@@ -137,25 +140,31 @@ def diagnose(cfg: DiagnoseConfig) -> dict:
         return _run(cfg, tmp)
 
 
-def _native_rollout(m: mujoco.MjModel, d: mujoco.MjData, tr, s: int, steps: int, substeps: int, qpos, qvel):
-    """Positions ``[steps, nq]`` of the native model from state ``(qpos, qvel)`` at sample ``s`` of
-    ``tr`` through its recorded commands (``substeps`` physics steps per sample); NaN past its end."""
+def _native_rollout(m: mujoco.MjModel, d: mujoco.MjData, tr, s: int, steps: int, substeps: int, qpos, qvel,
+                    with_qvel: bool = False):
+    """Positions ``[steps, nq]`` (and velocities: ``[steps, nq + nv]`` ``with_qvel``) of the native
+    model from state ``(qpos, qvel)`` at sample ``s`` of ``tr`` through its recorded commands
+    (``substeps`` physics steps per sample); NaN past its end."""
     d.qpos[:], d.qvel[:] = qpos, qvel
     if m.na:
         d.act[:] = 0.0
-    q = np.full((steps, m.nq), np.nan)
+    q = np.full((steps, m.nq + (m.nv if with_qvel else 0)), np.nan)
     for k in range(min(steps, len(tr) - s - 1)):
         d.ctrl[:] = tr.ctrl[s + k]
         d.qfrc_applied[:] = tr.qfrc[s + k]
         for _ in range(substeps):
             mujoco.mj_step(m, d)
-        q[k] = d.qpos
+        q[k, : m.nq] = d.qpos
+        if with_qvel:
+            q[k, m.nq:] = d.qvel
     return q
 
 
-def _native_runs(system: System, trajs, n: int, steps: int, starts: int = 3, substeps: int | None = None):
-    """Positions ``[k, steps, nq]`` of the native model simulated from measured states at ``starts``
-    points of every recording through the recorded commands (``substeps`` per sample)."""
+def _native_runs(system: System, trajs, n: int, steps: int, starts: int = 3, substeps: int | None = None,
+                 with_qvel: bool = False):
+    """Positions ``[k, steps, nq]`` (``with_qvel``: and velocities) of the native model simulated
+    from measured states at ``starts`` points of every recording through the recorded commands
+    (``substeps`` per sample)."""
     m = system.mj
     sub = substeps or system.substeps
     h = trajs[0].dt / sub
@@ -165,7 +174,8 @@ def _native_runs(system: System, trajs, n: int, steps: int, starts: int = 3, sub
     try:
         for tr in trajs:
             for s in np.linspace(0, max(len(tr) - steps - 1, 0), starts).astype(int):
-                out.append(_native_rollout(m, d, tr, s, steps, sub, tr.q[s], velocity_state(tr.v[s], tr.a[s], h)))
+                out.append(_native_rollout(m, d, tr, s, steps, sub, tr.q[s], velocity_state(tr.v[s], tr.a[s], h),
+                                           with_qvel))
     finally:
         m.opt.timestep = system.h
     return np.stack(out)
@@ -200,6 +210,29 @@ def choose_substeps(system: System, trajs, max_substeps: int = 64, seconds: floa
     while n % 2 == 0 and differ(_native_runs(system, trajs, steps, steps, substeps=n // 2), own) < 0.1:
         n //= 2
     return n
+
+
+def discretization_level(system: System, trajs, sh: Shooting, seconds: float = 0.3, finer: int = 8) -> float:
+    """How much misfit the physics step alone causes, in the units of the selection's misfit
+    level (``Selector.level``: squared error per residual, each signal over its weighting scale).
+
+    The nominal model is simulated natively from measured states through the recorded commands
+    at the diagnosis' step and at a step ``finer`` times shorter (``seconds`` per run); the mean
+    squared difference of positions (and velocities, where the fit compares them) is what the
+    step's own error adds to every model's misfit. An effect can absorb that error -- a damping
+    for the integrator's, a lag for its phase -- so no effect is named on a model whose misfit
+    it could explain (``SelectConfig.floor_step``)."""
+    n = system.substeps
+    steps = max(5, int(round(seconds / trajs[0].dt)))
+    a = _native_runs(system, trajs, steps, steps, substeps=n, with_qvel=True)
+    b = _native_runs(system, trajs, steps, steps, substeps=finer * n, with_qvel=True)
+    nq = system.mj.nq
+    parts = [((a[..., :nq] - b[..., :nq]) / sh.scale["qpos"]).ravel()]
+    if "qvel" in sh.signals:
+        parts.append(((a[..., nq:] - b[..., nq:]) / sh.scale["qvel"]).ravel())
+    e = np.concatenate(parts)
+    e = e[np.isfinite(e)]
+    return float(np.mean(e**2)) if e.size else 0.0
 
 
 def choose_horizon(system: System, trajs, budget: int = 6000, max_seconds: float = 2.0) -> int:
@@ -283,6 +316,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         spec = system.spec
         scales = {n: max(abs(float(spec[n].default)), 1e-6) for n in system.nominal}
         fitter = Fitter(sh, scales)
+        step_level = discretization_level(system, trajs[: len(train)], sh)
         bar.step(text=f"compiling the simulator ({sh.S} segments of {H} samples)")
         z0 = spec.default.copy()
         check_tiles = sh.tiles.of("heldout") if held else sh.tiles.of("val")
@@ -292,8 +326,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         cands = library(system, sc, tuple(cfg.effects))
         bar.step(text="fitting")
         sel = Selector(fitter, system.nominal, cands,
-                       SelectConfig(cfg.min_gain, cfg.min_t, cfg.floor_level, cfg.strong, cfg.top, cfg.max_effects),
-                       progress=lambda text: bar.step(0, text))
+                       SelectConfig(cfg.min_gain, cfg.min_t, cfg.floor_level, cfg.strong, cfg.top, cfg.max_effects,
+                                    floor_step=cfg.floor_step),
+                       progress=lambda text: bar.step(0, text), step_level=step_level)
         final, steps = sel.run()
         bar.step(text="checking on held-out data")
         # held-out check: nothing is kept that predicts held-out data worse than the nominal model
@@ -372,7 +407,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
               check_before, check_after, step_ho, pred0, trajs, train, held, check_tiles, out, t_start) -> dict:
     spec = system.spec
     z0 = spec.default.copy()
-    notes = list(system.notes) + list(sel.refits)
+    notes = list(system.notes) + list(sel.refits) + list(sel.pruned)
     if any(system.mj.actuator_dyntype[a] != 0 for a in range(system.mj.nu)):
         notes.append("actuator activations start at rest: an integrating servo at its joint's measured "
                      "position, a filter at the first command")
@@ -403,23 +438,30 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         base = steps[k] if k < len(steps) else steps[-1]
         rounds.append({"base": base.label, "base_validation_segments": [round(float(x), 6) for x in base.val],
                        "residuals_per_segment": base.result.n / max(len(sel.fit_tiles), 1), "candidates": rows})
-    # alternatives the validation data cannot tell from the last selected effect
+    # alternatives the validation data cannot tell from the last selected effect: they passed too and
+    # predict the validation segments as well (within ``tie_tolerance``) or better; the selected
+    # one was chosen for predicting all the training data best (``Selector.run``)
     indistinguishable = []
     if chosen.effects and sel.rounds:
         last = chosen.effects[-1]
         rnd = sel.rounds[len(chosen.effects) - 1]
         best = next((tr for tr in rnd if tr.candidate.label == last.label and tr.model is not None), None)
         if best is not None:
+            total = lambda tr: tr.model.result.phi + float(np.sum(tr.model.val))  # noqa: E731
             for tr in rnd:
                 if tr is best or tr.model is None or not tr.passed:
                     continue
                 if np.sum(tr.model.val) <= (1 + cfg.tie_tolerance) * np.sum(best.model.val):
                     indistinguishable.append({"effect": tr.candidate.effect, "target": tr.candidate.target,
-                                              "params": {n: float(tr.model.z[spec.index(n)]) for n in tr.candidate.params}})
+                                              "params": {n: float(tr.model.z[spec.index(n)]) for n in tr.candidate.params},
+                                              "validation": float(np.sum(tr.model.val)),
+                                              "training_error_ratio": total(tr) / max(total(best), 1e-300)})
     if indistinguishable:
-        notes.append("indistinguishable on these recordings: " + ", ".join(
-            f"`{r['effect']}`" + (f" at {r['target']}" if r["target"] else "") for r in indistinguishable)
-            + f" predicts the validation data within {100 * cfg.tie_tolerance:g}% of the selected effect; "
+        notes.append("indistinguishable on the validation data: " + ", ".join(
+            f"`{r['effect']}`" + (f" at {r['target']}" if r["target"] else "")
+            + f" (all training data {r['training_error_ratio']:.2f}x the selected effect's error)" for r in indistinguishable)
+            + f" predicts the validation segments within {100 * cfg.tie_tolerance:g}% of the selected effect or better; "
+            "the selected one predicts all the training data best; "
             "recordings with faster or richer commands would tell them apart")
     if dropped:
         notes.append("found on the training recordings but predicting the held-out ones worse than the nominal "
@@ -472,7 +514,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         "recordings": [r.path for r in train], "heldout": [r.path for r in held],
         "sample_period": trajs[0].dt, "physics_step": system.h, "substeps": system.substeps,
         "smoothing_window_samples": [t.window for t in trajs],
-        "horizon_samples": sh.H, "segments": {k: int(len(sh.tiles.of(k))) for k in ("fit", "val", "heldout")},
+        "horizon_samples": sh.H, "step_level": sel.step_level, "segments": {k: int(len(sh.tiles.of(k))) for k in ("fit", "val", "heldout")},
         "noise": {t.name: {j: float(s) for j, s in zip(system.joints, t.sigma_q)} for t in trajs},
         "answer": answer, "selected": selected,
         "effects": rounds[0]["candidates"] if rounds else [], "rounds": rounds, "steps": step_rows,

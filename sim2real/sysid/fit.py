@@ -2,7 +2,7 @@
 
 Objective over the chosen segments ``s`` (``shooting.py``)::
 
-    Phi(theta, v) = sum_s |r_s(theta, v_s)|^2 + sum_s |(v_s - v_hat_s) / sigma_v|^2
+    Phi(theta, v) = sum_s |r_s(theta, v_s)|^2 + sum_s |(v_s - v_hat_s) / sigma_v_s|^2
 
 ``r_s``: the segment's prediction errors over each signal's noise scale; ``v_s``: its initial
 velocity, a nuisance estimated with the parameters -- the data's own estimate ``v_hat_s``
@@ -70,7 +70,9 @@ class Fitter:
         self.spec = shooting.sys.spec
         self.scales = scales
         self.v_hat = shooting.v0.copy()
-        self.sigma_v = shooting.sigma_v
+        self.sigma_v = shooting.sigma_v             # [S, nv]: each segment's start velocity prior
+        # finite-difference step of the velocities (one per dof, all segments together)
+        self.dv = np.maximum(np.median(self.sigma_v, 0), 1e-4 * (np.abs(self.v_hat).max(0) + 1e-3))
         self.nv = shooting.v0.shape[1]
 
     # ------------------------------------------------------------------------------------------
@@ -83,7 +85,7 @@ class Fitter:
         return np.concatenate(out)
 
     def prior(self, v0, tiles) -> float:
-        return float(np.sum(((v0[tiles] - self.v_hat[tiles]) / self.sigma_v) ** 2))
+        return float(np.sum(((v0[tiles] - self.v_hat[tiles]) / self.sigma_v[tiles]) ** 2))
 
     def phi(self, r, v0, tiles) -> float:
         return float(np.sum(r**2)) + self.prior(v0, tiles)
@@ -97,7 +99,7 @@ class Fitter:
     def jacobian(self, z, v0, names, tiles, r0=None):
         """``(r0 [k, m], J_theta [k, m, p] per unit of scale, J_v [k, m, nv])``."""
         idx, step = self._steps(z, names)
-        dv = np.maximum(self.sigma_v, 1e-4 * (np.abs(self.v_hat).max(0) + 1e-3))
+        dv = self.dv
         zs, vs = [], []
         if r0 is None:
             zs.append(z)
@@ -125,9 +127,9 @@ class Fitter:
     def _reduce(self, r0, J_t, J_v, v0, tiles):
         """Eliminate the segment velocities: ``(H [p, p], g [p], solve_v, v_gain)`` of the reduced
         system; ``v_gain``: how much the objective drops (linearised) when only the velocities move."""
-        lam = 1.0 / self.sigma_v**2
+        lam = 1.0 / self.sigma_v[tiles] ** 2                        # [k, nv]
         dv_prior = (v0[tiles] - self.v_hat[tiles]) * lam          # [k, nv]
-        A = np.einsum("kmi,kmj->kij", J_v, J_v) + np.diag(lam)[None]
+        A = np.einsum("kmi,kmj->kij", J_v, J_v) + lam[:, :, None] * np.eye(self.nv)[None]
         b = np.einsum("kmi,km->ki", J_v, r0) + dv_prior
         C = np.einsum("kmp,kmi->kpi", J_t, J_v)                    # [k, p, nv]
         Ainv = np.linalg.inv(A)
@@ -250,11 +252,11 @@ class Fitter:
         M = len(zs)
         zs = [np.asarray(z, np.float32) for z in zs]
         v0s = [np.asarray(v, float).copy() for v in v0s]
-        dv = np.maximum(self.sigma_v, 1e-4 * (np.abs(self.v_hat).max(0) + 1e-3))
-        lam = 1.0 / self.sigma_v**2
+        dv = self.dv
+        lam = 1.0 / self.sigma_v[tiles] ** 2
 
         def obj(r, v):
-            return np.sum(r**2, 1) + np.sum(((v[tiles] - self.v_hat[tiles]) / self.sigma_v) ** 2, 1)
+            return np.sum(r**2, 1) + np.sum(((v[tiles] - self.v_hat[tiles]) / self.sigma_v[tiles]) ** 2, 1)
 
         r0 = list(self.residuals(np.stack(zs), np.stack(v0s), tiles))
         for _ in range(iters):
@@ -269,7 +271,7 @@ class Fitter:
             trial = []
             for i in range(M):
                 J_v = np.stack([(rk[i * self.nv + k] - r0[i]) / dv[k] for k in range(self.nv)], -1)
-                A = np.einsum("kmi,kmj->kij", J_v, J_v) + np.diag(lam)[None]
+                A = np.einsum("kmi,kmj->kij", J_v, J_v) + lam[:, :, None] * np.eye(self.nv)[None]
                 b = np.einsum("kmi,km->ki", J_v, r0[i]) + (v0s[i][tiles] - self.v_hat[tiles]) * lam
                 vv = v0s[i].copy()
                 vv[tiles] = v0s[i][tiles] - np.linalg.solve(A, b[..., None])[..., 0]

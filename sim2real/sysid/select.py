@@ -7,14 +7,22 @@ Forward selection on the simulation error (``fit.py``):
    model's other parameters; the current parameters and segment velocities are then re-solved
    *linearly* (the current model's Jacobian), and the effect's own magnitude too (the difference
    between neighbouring grid points is its Jacobian column). The drop of the objective is the
-   candidate's score -- a Rao score test, in effect, that needs no fit per candidate.
+   candidate's score -- a Rao score test, in effect, that needs no fit per candidate. Where the
+   re-fit moved a nominal parameter far (it may have taken up the missing effect), the same is
+   done from the model's own nominal values (``_bases``); each candidate starts from the better.
 3. The ``top`` candidates by score are fitted in full (Gauss-Newton from their best grid point,
    every parameter of the current model free), then judged on the *validation* segments (the
    tail of every training recording, never fitted): each segment's prediction error, with its
    initial velocity refined, for the current model and the candidate. A candidate passes when
    the validation error falls by ``min_gain`` (relative) and the per-segment differences are
-   significant (paired t over the segments >= ``min_t``, ``Selector.judge``). The best passing one joins the model.
+   significant (paired t over the segments >= ``min_t``, ``Selector.judge``). Of those that pass,
+   the one with the lowest error on the fitted and validation segments together joins the model.
 4. Repeat from 2 until nothing passes (or ``max_effects``).
+5. Backward check (``_prune``): each named effect must still pass the test against the model
+   without it; the weakest that fails is dropped, until all pass.
+
+Every decision is judged against two floors (``SelectConfig``): the misfit must exceed what the
+physics step alone causes, measured per diagnosis (``step_level``), and a tiny absolute level.
 
 A fit whose effect ends at its absent value (``Candidate.is_off``) never names it: its gain is a
 better fit of the current hypothesis, which replaces the current model before the round runs
@@ -86,24 +94,25 @@ class SelectConfig:
       min_t: ... with a paired t-statistic over the validation segments at least this large ...
       floor_level: ... and, unless its gain is ``strong``, the model it extends must misfit the
         validation data by more than this: its validation objective per residual (residuals are
-        in units of each signal's noise, at least 1% of its spread). A model already within the
-        precision of the data has nothing left for an effect to explain.
+        in units of each signal's noise, at least 1% of its spread) ...
+      floor_step: ... and by more than this many times the misfit the physics step alone causes
+        (``step_level``, measured per diagnosis by ``diagnose.discretization_level``). A model
+        whose remaining misfit the step's own error could explain has nothing left that an
+        effect could be trusted with: a damping, a lag would absorb the integrator's error.
       strong: a validation ratio at or below this passes whatever the misfit level.
-      floor_step: the misfit level must also exceed this many times the level the physics step
-        alone causes (``step_level``, measured per diagnosis): an effect could absorb that.
       top: candidates fitted per round; max_effects: effects named at most;
       min_score: candidates scoring less in the screen are not fitted; iters: Gauss-Newton steps.
     """
 
     min_gain: float = 0.05
     min_t: float = 2.0
-    floor_level: float = 0.1
+    floor_level: float = 0.003
     strong: float = 0.0
     top: int = 4
     max_effects: int = 3
     min_score: float = 0.01
     iters: int = 6
-    floor_step: float = 0.0
+    floor_step: float = 1.0
 
 
 def _paired_t(d: np.ndarray) -> float:
@@ -134,6 +143,7 @@ class Selector:
         self.progress = progress or (lambda text: None)
         self.rounds: list[list[Trial]] = []
         self.refits: list[str] = []     # models re-fitted from a better start (``_absent_effect_gain``)
+        self.pruned: list[str] = []     # effects dropped by the backward check (``_prune``)
 
     # ------------------------------------------------------------------------------------------
     def _scales(self, effects) -> dict:
@@ -442,10 +452,63 @@ class Selector:
                     continue
             if not passed:
                 break
-            best = min(passed, key=lambda t: np.sum(t.model.val))
+            # among the candidates that passed, the one that predicts all the training data best:
+            # the validation tail alone can be too short to rank two that both explain it (a
+            # delay and a lag at the noise floor), while the fitted part still tells them apart
+            best = min(passed, key=lambda t: t.model.result.phi + np.sum(t.model.val))
             if best.candidate.effect == "coulomb_friction":
                 best = self._asymmetry(M, best)
             M = best.model
             steps.append(M)
             remaining = [c for c in remaining if c.label != best.candidate.label]
-        return M, steps
+        return self._prune(M, steps)
+
+    def _without(self, M: Model, c: Candidate) -> Model:
+        """``M`` re-fitted without effect ``c`` (its parameters back at their neutral values)."""
+        z0 = M.z.copy()
+        idx = self.spec.indices(list(c.params))
+        z0[idx] = self.spec.default[idx]
+        R = self.fit([e for e in M.effects if e is not c], z0, M.result.v0)
+        self.validate([R])
+        return R
+
+    def _prune(self, M: Model, steps: list[Model]) -> tuple[Model, list[Model]]:
+        """Backward elimination: every named effect must still pass the test against the model
+        without it, the others in place. An effect found early can lose its reason once a later
+        one is in (a motor lag that stood in for a delay; a friction that made up for a lag
+        fitted at a local minimum). The weakest one that fails is dropped and the rest re-fitted,
+        until all pass; ``steps`` is then rebuilt as the forward path of the effects that stay."""
+        if len(M.effects) < 2:
+            return M, steps
+        start = M
+        while len(M.effects) >= 2:
+            self.progress(f"checking that each effect of {M.label} is still needed")
+            worst = None
+            for c in M.effects:
+                R = self._without(M, c)
+                ratio, t = self.judge(R, M)
+                ok = self._passes(ratio, t, self.level(R)) and M.result.phi < R.result.phi
+                if not ok and (worst is None or ratio > worst[1]):
+                    worst = (c, ratio, t, R)
+            if worst is None:
+                break
+            c, ratio, t, M = worst
+            self.pruned.append(f"{c.label} was dropped: with {M.label} in the model it no longer lowers the "
+                               f"validation error enough (ratio {ratio:.3f}, t = {t:.1f})")
+        if M is start:
+            return M, steps
+        # the forward path of what stays: the recorded steps while they are prefixes of it, then fits
+        path = [steps[0]]
+        for k in range(1, len(M.effects) + 1):
+            want = [c.label for c in M.effects[:k]]
+            have = next((S for S in steps if [c.label for c in S.effects] == want), None)
+            if have is None:
+                have = M if k == len(M.effects) else self._without_all(M, M.effects[k:])
+            path.append(have)
+        return M, path
+
+    def _without_all(self, M: Model, drop: list[Candidate]) -> Model:
+        R = M
+        for c in reversed(drop):
+            R = self._without(R, c)
+        return R

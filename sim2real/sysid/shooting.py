@@ -130,7 +130,11 @@ class Shooting:
         st = self.tiles.start
         self.q0 = q_all[st]
         self.v0 = velocity_state(cat(lambda tr: tr.v)[st], cat(lambda tr: tr.a)[st], system.h)
-        self.sigma_v = np.stack([tr.sigma_v for tr in trajs]).max(0) * 1.5 + 1e-9 * (np.abs(self.v0).max(0) + 1)
+        # each segment's start velocity is trusted as far as the data there allows (``sigma_v_t``)
+        offs = np.cumsum([0] + [len(tr) for tr in trajs])
+        local = np.stack([trajs[r].sigma_v_t[st[s] - offs[r]] if trajs[r].sigma_v_t is not None else trajs[r].sigma_v
+                          for s, r in enumerate(self.tiles.traj)])
+        self.sigma_v = local * 1.5 + 1e-9 * (np.abs(self.v0).max(0) + 1)   # [S, nv]
         # inputs of the jitted function (device arrays, passed as arguments, not baked in)
         act0 = np.zeros((len(trajs), m.na))
         for r, tr in enumerate(trajs):

@@ -21,6 +21,7 @@ import dataclasses
 
 import mujoco
 import numpy as np
+from scipy.ndimage import uniform_filter1d
 from scipy.signal import savgol_coeffs, savgol_filter
 
 
@@ -35,9 +36,11 @@ class Trajectory:
       v: ``[T, nv]`` velocity estimate (m/s | rad/s); ``a``: acceleration ``[T, nv]`` (smoothed).
       ctrl: ``[T, nu]`` commands; ``qfrc``: ``[T, nv]`` known external forces (0 where none).
       force: ``[T, nu]`` measured actuator force, or None; ``qvel``: ``[T, nv]`` measured, or None.
-      sigma_q, sigma_v: ``[nq]``, ``[nv]`` noise std of ``q`` and standard error of ``v``.
+      sigma_q, sigma_v: ``[nq]``, ``[nv]`` noise std of ``q`` and (RMS) standard error of ``v``.
       sigma_qvel, sigma_force: noise of the measured ``qvel`` / ``force`` columns (None if absent).
       window: Savitzky-Golay window (samples) used for ``v`` and ``a``.
+      sigma_v_t: ``[T, nv]`` standard error of ``v`` at every sample (larger where the motion
+        changes fast: the smoothing's local bias).
     """
 
     name: str
@@ -56,6 +59,7 @@ class Trajectory:
     sigma_qvel: np.ndarray | None
     sigma_force: np.ndarray | None
     window: int
+    sigma_v_t: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.time)
@@ -158,23 +162,26 @@ def _smooth(x, w, dt, deriv):
 
 
 def smoothing_error(x: np.ndarray, w: int, sigma: np.ndarray, dt: float, deriv: int) -> np.ndarray:
-    """``[n]`` RMS error of the window-``w`` Savitzky-Golay estimate (``deriv``-th derivative) of
-    each column of ``x [T, n]``: its noise (``sigma``: the columns' white noise) and its bias.
+    """``[T, n]`` error of the window-``w`` Savitzky-Golay estimate (``deriv``-th derivative) of
+    each column of ``x [T, n]`` at every sample: its noise (``sigma``: the columns' white noise)
+    and its local bias.
 
     A window wide enough that the *positions'* residual is only noise can still bend their
-    derivative where the motion changes fast (a PD loop's corrections, a step's onset). The bias
-    is measured against a window a third as wide (less bent): what their difference holds beyond
-    the noise the two windows leave differently is the wider one's bias (the narrow window's own,
-    smaller bias is ignored, so this errs low)."""
+    derivative where the motion changes fast (a command step's onset, a PD loop's corrections),
+    and only there. The bias is measured against a window a third as wide (less bent): what their
+    difference holds beyond the noise the two windows leave differently, averaged over ``w``
+    samples around each one, is the wider window's bias there (the narrow window's own, smaller
+    bias is ignored, so this errs low)."""
     cw = savgol_coeffs(w, 3, deriv=deriv, delta=dt)
     noise = sigma * np.sqrt(np.sum(cw**2))
     n = max(7, (w // 3) | 1)
     if n >= w or len(x) < w:
-        return noise
+        return np.broadcast_to(noise, x.shape).copy()
     cn = np.zeros(w)
     cn[(w - n) // 2: (w + n) // 2] = savgol_coeffs(n, 3, deriv=deriv, delta=dt)
-    d = _smooth(x, w, dt, deriv) - _smooth(x, n, dt, deriv)
-    bias2 = np.maximum(np.mean(d**2, 0) - sigma**2 * np.sum((cw - cn) ** 2), 0.0)
+    d2 = (_smooth(x, w, dt, deriv) - _smooth(x, n, dt, deriv)) ** 2
+    local = uniform_filter1d(d2, w, axis=0, mode="nearest")
+    bias2 = np.maximum(local - sigma**2 * np.sum((cw - cn) ** 2), 0.0)
     return np.sqrt(noise**2 + bias2)
 
 
@@ -191,7 +198,7 @@ def from_recording(rec, system, window: int | None = None) -> Trajectory:
     w = min(w, len(qpos) - (1 - len(qpos) % 2))
     v = _smooth(qpos, w, dt, 1)
     a = _smooth(qpos, w, dt, 2)
-    sigma_v = smoothing_error(qpos, w, sigma_q, dt, 1)
+    sigma_v_t = smoothing_error(qpos, w, sigma_q, dt, 1)
     qvel = None
     sigma_qvel = None
     if all(rec.get("qvel", j) is not None for j in system.joints):
@@ -200,10 +207,12 @@ def from_recording(rec, system, window: int | None = None) -> Trajectory:
         wv = choose_window(qvel, sigma_qvel, dt)
         vm = _smooth(qvel, wv, dt, 0)
         s_m = smoothing_error(qvel, wv, sigma_qvel, dt, 0)
-        # inverse-variance combination of the two estimates (errors: noise and smoothing bias)
-        wq, wm = 1 / np.maximum(sigma_v, 1e-12) ** 2, 1 / np.maximum(s_m, 1e-12) ** 2
+        # inverse-variance combination of the two estimates, sample by sample (errors: noise and
+        # the local smoothing bias)
+        wq, wm = 1 / np.maximum(sigma_v_t, 1e-12) ** 2, 1 / np.maximum(s_m, 1e-12) ** 2
         v = (wq * v + wm * vm) / (wq + wm)
-        sigma_v = 1 / np.sqrt(wq + wm)
+        sigma_v_t = 1 / np.sqrt(wq + wm)
+    sigma_v = np.sqrt(np.mean(sigma_v_t**2, 0))
     sigma_force = noise_std(force) if force is not None else None
     return Trajectory(rec.name, rec.path, dt, rec.time - rec.time[0], qpos, v, a, ctrl, qfrc, force, qvel,
-                      sigma_q, sigma_v, sigma_qvel, sigma_force, int(w))
+                      sigma_q, sigma_v, sigma_qvel, sigma_force, int(w), sigma_v_t)

@@ -53,7 +53,15 @@ class Coulomb(Kind):
         # away at Fc(1+a) one way and Fc(1-a) the other, as the fitted law does. Stribeck: <numeric>.
         jn = ctx.system.joints[p.index]
         if p.kind == "coulomb" and (v > 0 or p.default > 0):
-            ctx.spec.joint(jn).frictionloss = v
+            # MuJoCo's friction is a soft constraint; at its default time constant (0.02 s) a
+            # stuck joint creeps and every stop is softened, which the fitted law does not do
+            # (an arm under PD control ends 0.06 rad apart within 50 ms). Two physics steps is the
+            # hardest MuJoCo simulates stably.
+            j = ctx.spec.joint(jn)
+            j.frictionloss = v
+            j.solref_friction = [2.0 * float(ctx.spec.option.timestep), 1.0]
+            ctx.native(p.name, f"frictionloss with solreffriction=\"{2.0 * float(ctx.spec.option.timestep):.6g} 1\" "
+                               "(MuJoCo's hardest: its default 0.02 s softens the stops the fitted law makes)")
         elif p.kind == "coulomb_asym" and v != 0 and ctx.values.get(f"coulomb:{jn}", 0.0) > 0:
             force = -v * ctx.values[f"coulomb:{jn}"]
             a = ctx.spec.add_actuator(name=f"sim2real_friction_offset:{jn}", target=jn,
