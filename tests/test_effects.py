@@ -210,7 +210,7 @@ def test_a_new_command_path_stage_is_one_plug_in(monkeypatch):
         def command_setup(self, m, spec, cfg):
             return {"rows": rows(spec, "command_bias", np.arange(m.nu))}
 
-        def command(self, data, z, state, u, j, n, qpos, h):
+        def command(self, data, z, state, u, j, n, qpos, h, qvel=None):
             return u + take(z, data["rows"]), state
 
     plug = CommandBias()
@@ -228,3 +228,42 @@ def test_a_new_command_path_stage_is_one_plug_in(monkeypatch):
     z = env.z_of(**{"command_bias:motor": 0.25, "action_delay": 1.0})
     u, _ = fx.actuate(jnp.asarray(z), es, 0, 1, qpos, env.dt)
     assert float(u[0]) == pytest.approx(0.25)                               # the delayed command (0) + bias
+
+
+def test_backlash_motor_side_crosses_the_band_then_drives_the_joint():
+    """The backlash stage against hand-derived mechanics: a 0.1 Nm motor (motor side 1e-3 kg m^2)
+    behind a 0.02 rad band drives a free 0.01 kg m^2 joint. Nothing reaches the joint while the
+    motor side crosses half the band (sqrt(2 * 0.01 / 100) = 14.1 ms); a rigid mesh then passes
+    its momentum on (the joint starts at J w / I); a compliant one (10 Nm/rad) settles at the
+    deflection that accelerates the joint with the motor, tau I / ((I + J) k)."""
+    from sim2real.physics.kinds.backlash import Backlash
+
+    bk = Backlash()
+    data = {"rows": np.array([0]), "inertia_rows": np.array([1]), "stiffness_rows": np.array([2]),
+            "inertia": np.array([1e-3]), "gain_rows": np.array([-1]), "gain": np.array([1.0]),
+            "k_per_gain": np.array([0.0]), "damp": np.array([0.0]), "qpos": np.array([0]), "dof": np.array([0])}
+    I, J, tau, h = 0.01, 1e-3, 0.1, 1e-4
+
+    def run(k, steps):
+        z = jnp.array([0.02, J, k])
+
+        def step(carry, _):
+            state, q, v = carry
+            u, state = bk.command(data, z, state, jnp.array([tau]), 0, 1, q[None], h, v[None])
+            v = v + h * u[0] / I   # the joint under the torque that reached it (gain 1)
+            return (state, q + h * v, v), jnp.stack([u[0], v, state[0][0]])
+
+        init = (bk.command_state(data, jnp.zeros(1)), jnp.zeros(()), jnp.zeros(()))
+        return np.asarray(jax.lax.scan(step, init, None, length=steps)[1], float)
+
+    rigid = run(0.0, 300)
+    cross = int(np.argmax(rigid[:, 0] != 0.0))
+    assert cross * h == pytest.approx(np.sqrt(2 * 0.01 / (tau / J)), rel=0.02)
+    assert (rigid[:cross, 0] == 0.0).all()
+    w_motor = tau / J * cross * h
+    assert rigid[cross, 1] == pytest.approx(J * w_motor / I + h * tau / I, rel=0.02)   # momentum passed on
+    assert np.allclose(rigid[cross:, 2], 0.01)                                          # then at the edge
+    compliant = run(10.0, 3000)
+    assert (compliant[:cross, 0] == 0.0).all()
+    settled = compliant[-500:, 2] - 0.01
+    assert settled.mean() == pytest.approx(tau * I / ((I + J) * 10.0), rel=0.1)

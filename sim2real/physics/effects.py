@@ -35,7 +35,7 @@ from sim2real.physics.params import ParamSpec
 # Per-env effect memory: ``{"ctrl": [nu] the command of this control step, <kind>: its memory}``
 # for every stage of the command path on this model (``kinds/delay.py``: the delay line
 # ``[D + 2, nu]``; ``lag.py``: the filter's output ``[nu]``; ``backlash.py``: the motor side's
-# offset in the band and its rate). A dict, so a new stage brings its own entry.
+# position in the band and its velocity). A dict, so a new stage brings its own entry.
 EffectState = dict
 
 
@@ -91,7 +91,7 @@ class Effects:
         out.update({name: k.push(d, es[name], ctrl) for k, name, d in self._command})
         return out
 
-    def actuate(self, z, es: EffectState, j, n: int, qpos, h: float):
+    def actuate(self, z, es: EffectState, j, n: int, qpos, h: float, qvel=None):
         """The command path for physics sub-step ``j`` of ``n``: each stage in turn (delay -> motor
         lag -> backlash).
 
@@ -99,14 +99,15 @@ class Effects:
           z: ``[P]`` physics vector (clipped).
           es: effect state (the command of this control step already ``push``-ed).
           j: sub-step index (traced or static), ``n``: sub-steps per control step.
-          qpos: ``[nq]`` current joint positions (true, for servo backlash).
+          qpos, qvel: ``[nq]``, ``[nv]`` current joint positions and velocities (true; the
+            backlash stage moves its dead band with the joint).
           h: physics sub-step in seconds.
         Returns:
           ``(ctrl_applied [nu], new effect state)``.
         """
         u, out = es["ctrl"], dict(es)
         for k, name, d in self._command:
-            u, out[name] = k.command(d, z, es[name], u, j, n, qpos, h)
+            u, out[name] = k.command(d, z, es[name], u, j, n, qpos, h, qvel)
         return u, out
 
     def velocity_damping(self, z, qvel) -> tuple[np.ndarray, jax.Array]:

@@ -17,7 +17,8 @@ mass_offset            body        ``payload`` and ``payload_r`` (a point mass a
 action_delay           global      ``action_delay`` (samples, fractional)
 motor_lag              actuator    ``motor_lag`` (time constant, s)
 actuator_saturation    actuator    ``saturation`` (force limit, actuator force units)
-backlash               actuator    ``backlash`` (dead band width, joint units)
+backlash               actuator    ``backlash`` (dead band width, joint units), ``backlash_inertia``,
+                                   ``backlash_stiffness`` (the mesh's: 0 rigid)
 quadratic_drag         joint       ``drag`` (force -c v|v|; searched only when asked for)
 =====================  ==========  ==========================================================
 

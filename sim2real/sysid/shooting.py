@@ -142,7 +142,7 @@ class Shooting:
         self._data = dict(
             ctrl=jnp.asarray(cat(lambda tr: tr.ctrl), jnp.float32),
             qfrc=jnp.asarray(cat(lambda tr: tr.qfrc), jnp.float32),
-            q=jnp.asarray(q_all, jnp.float32),
+            q=jnp.asarray(q_all, jnp.float32), v=jnp.asarray(cat(lambda tr: tr.v), jnp.float32),
             start=jnp.asarray(st, jnp.int32), first=jnp.asarray(self.tiles.first),
             act0=jnp.asarray(act0[self.tiles.traj], jnp.float32), q0=jnp.asarray(self.q0, jnp.float32))
         self._fn = jax.jit(self._predict_batch)
@@ -207,10 +207,11 @@ class Shooting:
                 t = data["start"][s] + k
                 es = fx.push(es, data["ctrl"][t])
                 qt = fx.unsense(z, data["q"][t])
+                vt = data["v"][t]
 
                 def sub(c2, j):
                     es, act = c2
-                    u, es = fx.actuate(z, es, j, n, qt, h)
+                    u, es = fx.actuate(z, es, j, n, qt, h, vt)
                     return (es, self._act_step(act, u, h)), None
 
                 return jax.lax.scan(sub, (es, act), jnp.arange(n))[0], None

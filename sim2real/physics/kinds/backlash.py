@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 
 from sim2real.physics.kinds.base import ACTUATOR, Kind, name_of, rows, take
-from sim2real.physics.kinds.gain import is_servo, nominal_gain
+from sim2real.physics.kinds.gain import nominal_gain
 from sim2real.physics.params import Param
 
 
@@ -26,8 +26,41 @@ def inertia_params(m: mujoco.MjModel, actuators, default: float = 1e-2) -> list[
     return ps
 
 
+def stiffness_params(m: mujoco.MjModel, actuators) -> list[Param]:
+    """``backlash_stiffness:<act>``: the mesh's stiffness beyond the dead band (reflected to the
+    joint); 0 (the default) is a rigid mesh."""
+    ps = []
+    for a in actuators:
+        j = int(m.actuator_trnid[a, 0])
+        slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
+        ps.append(Param(f"backlash_stiffness:{name_of(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)}", 0.0, 0.0, 1e9,
+                        "N/m" if slide else "Nm/rad", "stiffness of the mesh beyond the backlash band (0: rigid)",
+                        "backlash_stiffness", a))
+    return ps
+
+
+# damping ratio of the motor side's mode on a compliant mesh (a common modelling choice for a gear
+# mesh; the independent benchmark's generator makes the same one)
+MESH_DAMPING_RATIO = 0.5
+
+
 class Backlash(Kind):
-    owns = ("backlash", "backlash_inertia")
+    """A dead band of width ``b`` between an actuator and its joint, crossed by the motor side.
+
+    The motor side is a state of its own: its position relative to the joint, ``gap`` in
+    ``[-b/2, b/2]``, and its velocity ``w`` (joint units). The actuator's law acts on it -- a
+    motor's torque ``G u``; a servo's ``G u - K (q + gap) - D w``, with the joint's ``K``/``D``
+    from its bias -- over the motor side's inertia ``J`` (``backlash_inertia``). Inside the band
+    the joint feels nothing (the command sent to MuJoCo is the one whose actuator force is zero)
+    and the band moves with the joint (``gap' = w - qdot``); at an edge the motor side's momentum
+    relative to the joint, ``J (w - qdot)``, passes to the joint in that sub-step (an inelastic
+    impact, ``J`` small against the joint's own inertia) and the two then move together, the
+    actuator's force reaching the joint, until it pulls away from the edge. The motor side is
+    integrated implicitly (a stiff servo on a light rotor stays stable at any sub-step). Actuators
+    with activation dynamics pass the command through their filter after this stage.
+    """
+
+    owns = ("backlash", "backlash_inertia", "backlash_stiffness")
     attach = ACTUATOR
     declares = {"backlash": (0.0, 0.0, 1.0, "m|rad", "dead band width between the actuator and its joint")}
     order = 61
@@ -42,43 +75,86 @@ class Backlash(Kind):
             return None
         joint = np.array([m.actuator_trnid[a, 0] for a in acts], np.int32)
         arm = np.array([m.dof_armature[m.jnt_dofadr[j]] for j in joint])
+        gear = np.array([m.actuator_gear[a, 0] for a in acts])
+        g0 = np.array([nominal_gain(m, a) for a in acts])
+        affine = np.array([m.actuator_biastype[a] == mujoco.mjtBias.mjBIAS_AFFINE for a in acts])
+        # the bias law in joint units: -K q - D qdot (a servo's stiffness, a damping bias)
+        K = np.where(affine, -gear**2 * m.actuator_biasprm[:, 1], 0.0) if m.nu else np.zeros(0)
+        D = np.where(affine, -gear**2 * m.actuator_biasprm[:, 2], 0.0) if m.nu else np.zeros(0)
         return {
             "rows": r,
             # the motor side's inertia may be a parameter too (the diagnosis fits it); else the static guess
             "inertia_rows": rows(spec, "backlash_inertia", acts),
+            "stiffness_rows": rows(spec, "backlash_stiffness", acts),
             "inertia": (np.full(m.nu, cfg.backlash_inertia) if cfg.backlash_inertia > 0 else np.where(arm > 0, arm, 1e-2)),
             "gain_rows": rows(spec, "actuator_gain", acts),
-            "gain": np.array([nominal_gain(m, a) for a in acts]),
+            "gain": g0,
+            # K follows a fitted gain (it is the servo's Kp); D stays as declared
+            "k_per_gain": np.where(np.abs(g0) > 0, K / np.where(np.abs(g0) > 0, g0, 1.0), 0.0),
+            "damp": D,
             "qpos": np.array([m.jnt_qposadr[j] for j in joint], np.int32),
-            "servo": np.array([is_servo(m, a) for a in acts], bool),
+            "dof": np.array([m.jnt_dofadr[j] for j in joint], np.int32),
         }
 
     def command_state(self, data, ctrl):
-        """``(gap [nu], gap_vel [nu])``: the motor side's offset inside the band, and its rate."""
+        """``(gap [nu], w [nu])``: the motor side's position inside the band relative to its joint,
+        and its velocity (joint units; at rest, centred)."""
         nu = len(data["rows"])
         return jnp.zeros(nu), jnp.zeros(nu)
 
-    def command(self, data, z, state, u, j, n, qpos, h):
-        gap, gap_vel = state
+    def command(self, data, z, state, u, j, n, qpos, h, qvel=None):
+        gap, w = state
         b = take(z, data["rows"])
         half = 0.5 * b
         q = qpos[data["qpos"]]
-        # servo: the spring between target and joint acts only outside the band
-        err = u - q
-        servo_u = q + jnp.sign(err) * jnp.maximum(jnp.abs(err) - half, 0.0)
-        # motor: torque reaches the joint only once the motor side has crossed the band
-        gain = jnp.where(data["gain_rows"] >= 0, take(z, data["gain_rows"]), data["gain"])
-        torque = gain * u
-        inertia = jnp.where(data["inertia_rows"] >= 0, take(z, data["inertia_rows"], 1.0), data["inertia"])
-        gv = gap_vel + h * torque / jnp.maximum(inertia, 1e-9)
-        g = gap + h * gv
-        hit_hi, hit_lo = g >= half, g <= -half
-        engaged = (hit_hi & (torque > 0)) | (hit_lo & (torque < 0))
-        motor_u = jnp.where(engaged, u, 0.0)
-        on, servo = b > 0, data["servo"]
-        gap = jnp.where(on & ~servo, jnp.clip(g, -half, half), gap)
-        gap_vel = jnp.where(on & ~servo, jnp.where(hit_hi | hit_lo, 0.0, gv), gap_vel)
-        return jnp.where(on, jnp.where(servo, servo_u, motor_u), u), (gap, gap_vel)
+        v = qvel[data["dof"]] if qvel is not None else jnp.zeros_like(q)
+        G = jnp.where(data["gain_rows"] >= 0, take(z, data["gain_rows"]), data["gain"])
+        K, D = G * data["k_per_gain"], data["damp"]
+        J = jnp.maximum(jnp.where(data["inertia_rows"] >= 0, take(z, data["inertia_rows"], 1.0), data["inertia"]), 1e-9)
+        k = jnp.maximum(take(z, data["stiffness_rows"], 0.0), 0.0)
+        c = 2.0 * MESH_DAMPING_RATIO * jnp.sqrt(k * J)
+        G_safe = jnp.where(jnp.abs(G) > 1e-12, G, 1e-12)
+
+        def ctrl_for(force):  # the command whose actuator force on the joint is ``force``
+            return (force + K * q + D * v) / G_safe
+
+        def step(kk, cc, e):
+            """The motor side after one implicit step with a mesh spring ``kk`` (damping ``cc``)
+            pulling its gap towards ``e``; ``(gap, w)``."""
+            w1 = (J * w + h * (G * u - K * (q + gap - h * v) - kk * (gap - h * v - e) + cc * v)) / (
+                J + h * h * (K + kk) + h * (D + cc))
+            return gap + h * (w1 - v), w1
+
+        # free: the motor side under the actuator's law alone
+        g_free, w_free = step(0.0, 0.0, 0.0)
+        # -- a rigid mesh: at an edge, the actuator pushing into it, the motor side moves with the joint
+        edge = jnp.where(gap >= 0, half, -half)
+        push = G * u - K * (q + edge) - D * v
+        engaged = (jnp.abs(gap) >= half) & (push * jnp.sign(edge) > 0)
+        hit = (g_free >= half) | (g_free <= -half)
+        g_hit = jnp.clip(g_free, -half, half)
+        impulse = J * (w_free - v) / h                    # the relative momentum, passed on in this sub-step
+        force_hit = impulse + G * u - K * (q + g_hit) - D * v
+        u_rigid = jnp.where(engaged, u - K * edge / G_safe,
+                            jnp.where(hit, ctrl_for(force_hit), ctrl_for(jnp.zeros_like(u))))
+        gap_rigid = jnp.where(engaged, edge, jnp.where(hit, g_hit, g_free))
+        w_rigid = jnp.where(engaged | hit, v, w_free)
+        # -- a compliant mesh: beyond the band a spring; engaged on the side the motor side is (or goes)
+        side = jnp.where(jnp.abs(gap) > half, jnp.sign(gap), jnp.sign(g_free))
+        e = side * half
+        g_eng, w_eng = step(k, c, e)
+        mesh = k * (g_eng - e) + c * (w_eng - v)
+        # in contact at the step's end, pushing (a mesh does not pull)
+        on_mesh = ((jnp.abs(gap) > half) | (jnp.abs(g_free) > half)) & (side * (g_eng - e) > 0) & (side * mesh > 0)
+        u_comp = jnp.where(on_mesh, ctrl_for(mesh), ctrl_for(jnp.zeros_like(u)))
+        gap_comp = jnp.where(on_mesh, g_eng, jnp.clip(g_free, -half, half))
+        w_comp = jnp.where(on_mesh, w_eng, w_free)
+        rigid = k <= 0
+        u_out = jnp.where(rigid, u_rigid, u_comp)
+        gap_new = jnp.where(rigid, gap_rigid, gap_comp)
+        w_new = jnp.where(rigid, w_rigid, w_comp)
+        on = b > 0
+        return jnp.where(on, u_out, u), (jnp.where(on, gap_new, gap), jnp.where(on, w_new, w))
 
     def command_rows(self, data):
         return [int(r) for r in data["rows"] if r >= 0]
@@ -87,11 +163,21 @@ class Backlash(Kind):
         m = system.mj
         an = system.actuators[target]
         j = int(m.actuator_trnid[target, 0])
-        # the dead band's width and the inertia of the motor side that crosses it (a few percent
-        # of the joint's own, unknown: fitted)
+        # the dead band's width, the inertia of the motor side that crosses it (a few percent of
+        # the joint's own, unknown: fitted) and the mesh's stiffness: rigid, or the joint ringing
+        # against it at tens of Hz (a gear train's compliance)
         slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
         widths = np.geomspace(4e-5, 2e-3, 4) if slide else np.geomspace(0.004, 0.06, 4)
         J = float(sc.inertia[j]) if sc.inertia is not None else 1e-2
-        add("backlash", an, [f"backlash:{an}", f"backlash_inertia:{an}"],
-            [(w, f * J) for w in widths for f in (0.01, 0.1)], [float(widths[1]), 0.03 * J],
-            [(0.25 * float(widths[0]), float(widths[-1])), (1e-4 * J, 2.0 * J)])
+        params = [f"backlash:{an}", f"backlash_inertia:{an}"]
+        if f"backlash_stiffness:{an}" in system.spec:
+            params.append(f"backlash_stiffness:{an}")
+            # rigid, and compliant (the joint ringing at 25 Hz): the fit moves all three
+            grid = [(w, 0.03 * J, k) for w in widths for k in (0.0, J * (2 * np.pi * 25.0) ** 2)]
+            scales = [float(widths[1]), 0.03 * J, J * (2 * np.pi * 25.0) ** 2]
+            search = [(0.25 * float(widths[0]), float(widths[-1])), (1e-4 * J, 2.0 * J), (0.0, J * (2 * np.pi * 200.0) ** 2)]
+        else:
+            grid = [(w, f * J) for w in widths for f in (0.01, 0.1)]
+            scales = [float(widths[1]), 0.03 * J]
+            search = [(0.25 * float(widths[0]), float(widths[-1])), (1e-4 * J, 2.0 * J)]
+        add("backlash", an, params, grid, scales, search)

@@ -92,8 +92,9 @@ class Kind:
         """A new command ``[nu]`` arrives (once per control step)."""
         return state
 
-    def command(self, data, z, state, u, j, n: int, qpos, h: float):
-        """``(u [nu], state)`` for physics sub-step ``j`` of ``n`` (``h`` seconds; ``qpos [nq]`` true)."""
+    def command(self, data, z, state, u, j, n: int, qpos, h: float, qvel=None):
+        """``(u [nu], state)`` for physics sub-step ``j`` of ``n`` (``h`` seconds; ``qpos [nq]``,
+        ``qvel [nv]``: the true state at the sub-step's start)."""
         raise NotImplementedError
 
     def command_rows(self, data) -> list[int]:

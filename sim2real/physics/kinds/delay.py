@@ -25,7 +25,7 @@ class ActionDelay(Kind):
     def push(self, data, buf, ctrl):
         return jnp.concatenate([ctrl[None], buf[:-1]], axis=0)
 
-    def command(self, data, z, buf, u, j, n, qpos, h):
+    def command(self, data, z, buf, u, j, n, qpos, h, qvel=None):
         """The command applied during sub-step ``j`` of ``n``.
 
         A delay of ``d`` control steps (fractional allowed) shifts the piecewise-constant command

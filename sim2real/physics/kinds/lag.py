@@ -26,7 +26,7 @@ class MotorLag(Kind):
         """``[nu]`` the filter's output."""
         return jnp.asarray(ctrl, jnp.float32) + jnp.zeros(len(data["rows"]))
 
-    def command(self, data, z, lag, u, j, n, qpos, h):
+    def command(self, data, z, lag, u, j, n, qpos, h, qvel=None):
         # exact discretisation over the sub-step
         tau = take(z, data["rows"])
         alpha = 1.0 - jnp.exp(-h / jnp.maximum(tau, 1e-9))
