@@ -145,6 +145,18 @@ class Shooting:
             q=jnp.asarray(q_all, jnp.float32), v=jnp.asarray(cat(lambda tr: tr.v), jnp.float32),
             start=jnp.asarray(st, jnp.int32), first=jnp.asarray(self.tiles.first),
             act0=jnp.asarray(act0[self.tiles.traj], jnp.float32), q0=jnp.asarray(self.q0, jnp.float32))
+        # the command path's pre-run: recordings are independent (each starts at rest), so they run
+        # side by side, each scanning its own segments in order (``order [R, Smax]``, padded with
+        # its last segment); ``flat [S]`` finds segment s in the [R * Smax] result
+        R = len(trajs)
+        per = [np.where(self.tiles.traj == r)[0] for r in range(R)]
+        smax = max(len(p) for p in per)
+        order = np.stack([np.concatenate([p, np.full(smax - len(p), p[-1])]) for p in per])
+        flat = np.empty(S, np.int64)
+        for r, p in enumerate(per):
+            flat[p] = r * smax + np.arange(len(p))
+        self._data["order"] = jnp.asarray(order, jnp.int32)
+        self._data["flat"] = jnp.asarray(flat, jnp.int32)
         self._fn = jax.jit(self._predict_batch)
         self.calls = 0
         self.seconds = 0.0
@@ -218,9 +230,9 @@ class Shooting:
 
             return jax.lax.scan(sample, (es, act), jnp.arange(H))[0], out
 
-        na = sys.mj.na
-        init = (es_init, jnp.zeros(na))
-        return jax.lax.scan(segment, init, jnp.arange(self.S))[1]
+        init = (es_init, jnp.zeros(sys.mj.na))
+        per_rec = jax.vmap(lambda order: jax.lax.scan(segment, init, order)[1])(data["order"])   # [R, Smax]
+        return jax.tree_util.tree_map(lambda x: x.reshape((x.shape[0] * x.shape[1],) + x.shape[2:])[data["flat"]], per_rec)
 
     def _segment(self, z, model, data, q0, v0, es, act, s):
         sys = self.sys
