@@ -127,27 +127,6 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
     with pytest.raises(Exception, match="test.adapt=true needs an algorithm with an adaptation operator"):
         train(driver_config(tmp_path, "name=udr_adapt", "total_steps=128", *test))
 
-    # few-shot evaluation of the run over a physics grid (scripts/evaluate.py adapt=true)
-    evaluate = load_script("evaluate")
-    evaluate.main([f"run={full['run_dir']}", "adapt=true", "x=mass:carriage=60,140", "episodes=1"])
-    for name in ("returns.csv", "returns_before.csv"):  # mass, mean, std, one column per seed
-        table = np.loadtxt(os.path.join(full["run_dir"], "eval", "mass-carriage", name), delimiter=",", skiprows=1)
-        assert table.shape == (2, 5) and np.all(np.isfinite(table[:, 1]))
-        np.testing.assert_allclose(table[:, 1], table[:, 3:].mean(1), rtol=1e-4)
-    # a run folder without checkpoints is evaluated from its exported policies: same numbers
-    part = os.path.join(str(tmp_path), "part")
-    shutil.rmtree(os.path.join(part, "checkpoints"))
-    cfg_path = os.path.join(part, "config.yaml")  # ... and needs no longer the run it was warm-started from
-    text = open(cfg_path).read()
-    assert udr_run["run_dir"] in text
-    open(cfg_path, "w").write(text.replace(udr_run["run_dir"], os.path.join(str(tmp_path), "gone")))
-    evaluate.main([f"run={part}", "adapt=true", "x=mass:carriage=60,140", "episodes=1"])
-    for name in ("returns.csv", "returns_before.csv"):
-        assert (open(os.path.join(part, "eval", "mass-carriage", name)).read()
-                == open(os.path.join(full["run_dir"], "eval", "mass-carriage", name)).read())
-    with pytest.raises(Exception, match="adaptation operator"):  # a UDR run has none
-        evaluate.main([f"run={udr_run['run_dir']}", "adapt=true", "x=mass:carriage=60,140"])
-
 
 def test_warm_start_must_match_the_network(tmp_path, udr_run):
     from sim2real.training.driver import build_algo  # (the driver reads warm starts; no algorithm reads run folders)
@@ -160,6 +139,40 @@ def test_warm_start_must_match_the_network(tmp_path, udr_run):
     cfg = driver_config(tmp_path, "algo=es_maml", f"algo_options.warm_start={tmp_path}/nothing")
     with pytest.raises(FileNotFoundError, match="nothing"):
         build_algo(cfg, env)
+
+
+@pytest.mark.slow
+def test_few_shot_evaluation_of_a_run_and_of_its_exported_policies(tmp_path, udr_run):
+    """scripts/evaluate.py adapt=true on an es_maml run: returns before and after adaptation over a
+    physics grid; the run folder without checkpoints (and without the run it was warm-started
+    from) gives the same numbers from its exported policies; a UDR run cannot be adapted."""
+    from sim2real.training.driver import train
+
+    per_update = 4 * (2 * 64 + 20)
+    es = ["algo=es_maml", "num_seeds=2", "updates_per_chunk=1", f"total_steps={2 * per_update}",
+          f"algo_options={{population: 4, inner_updates: 2, warm_start: {udr_run['run_dir']}}}"]
+    full = train(driver_config(tmp_path, *es, "name=full"))
+    evaluate = load_script("evaluate")
+    evaluate.main([f"run={full['run_dir']}", "adapt=true", "x=mass:carriage=60,140", "episodes=1"])
+    for name in ("returns.csv", "returns_before.csv"):  # mass, mean, std, one column per seed
+        table = np.loadtxt(os.path.join(full["run_dir"], "eval", "mass-carriage", name), delimiter=",", skiprows=1)
+        assert table.shape == (2, 5) and np.all(np.isfinite(table[:, 1]))
+        np.testing.assert_allclose(table[:, 1], table[:, 3:].mean(1), rtol=1e-4)
+    # a copy of the run folder without checkpoints is evaluated from its exported policies
+    part = os.path.join(str(tmp_path), "part")
+    shutil.copytree(full["run_dir"], part, ignore=shutil.ignore_patterns("eval"))
+    shutil.rmtree(os.path.join(part, "checkpoints"))
+    cfg_path = os.path.join(part, "config.yaml")  # ... and needs no longer the run it was warm-started from
+    text = open(cfg_path).read()
+    assert udr_run["run_dir"] in text
+    open(cfg_path, "w").write(text.replace(udr_run["run_dir"], os.path.join(str(tmp_path), "gone")))
+    evaluate.main([f"run={part}", "adapt=true", "x=mass:carriage=60,140", "episodes=1"])
+    for name in ("returns.csv", "returns_before.csv"):
+        assert (open(os.path.join(part, "eval", "mass-carriage", name)).read()
+                == open(os.path.join(full["run_dir"], "eval", "mass-carriage", name)).read())
+    with pytest.raises(Exception, match="adaptation operator"):  # a UDR run has none
+        evaluate.main([f"run={udr_run['run_dir']}", "adapt=true", "x=mass:carriage=60,140"])
+
 
 
 def test_bad_config_is_named():
