@@ -428,3 +428,53 @@ def test_fitted_friction_is_as_hard_in_mujoco_as_the_fitted_law(tmp_path):
     ref = np.array(ref)
     err_hard, err_soft = (np.sqrt(np.mean((swing(m) - ref) ** 2)) for m in (hard, soft))
     assert err_hard < 0.5 * err_soft
+
+
+def _short_native_recordings(tmp_path, n, count=3):
+    """``count`` recordings of ``n`` samples of the pendulum stepped by native MuJoCo (a policy that
+    falls at once gives such logs)."""
+    m = _model()
+    paths = []
+    for k in range(count):
+        d = mujoco.MjData(m)
+        d.qpos[0] = 0.3 + 0.2 * k
+        t = np.arange(n) * m.opt.timestep
+        u = 1.5 * np.sin(7.0 * t + k)
+        q = np.empty(n)
+        for i in range(n):
+            q[i] = d.qpos[0]
+            d.ctrl[0] = u[i]
+            mujoco.mj_step(m, d)
+        paths.append(str(tmp_path / f"short_{k}.csv"))
+        save_csv(paths[-1], t, {"qpos:hinge": q, "ctrl:motor": u})
+    return paths
+
+
+def test_short_recordings_shorten_the_chosen_horizon_not_a_set_one(tmp_path):
+    """Three 0.6 s logs: the horizon the data chose is shortened (and the report says so) until
+    there are segments to fit and to validate on; a horizon the user set is refused instead."""
+    paths = _short_native_recordings(tmp_path, 60)
+    d = diagnose(DiagnoseConfig(model=PENDULUM, recordings=tuple(paths[:2]), heldout=(paths[2],),
+                                out=str(tmp_path / "d"), plots=False, progress=False, effects=("none",)))
+    assert d["answer"] == "none"
+    assert any(n.startswith("prediction horizon shortened to") for n in d["notes"]), d["notes"]
+    assert d["horizon_samples"] >= 5 and d["segments"]["val"] >= 2
+    with pytest.raises(RecordingError, match="too short for 20-sample predictions"):
+        diagnose(DiagnoseConfig(model=PENDULUM, recordings=tuple(paths[:2]), out=str(tmp_path / "e"),
+                                plots=False, progress=False, effects=("none",), horizon_seconds=0.2))
+    assert not os.path.exists(tmp_path / "e")
+
+
+def test_targets_restrict_the_search_and_unknown_ones_are_refused(tmp_path):
+    """``targets``: only effects on the named joints/actuators/bodies (and global ones) are
+    searched; a name that is not in the model is refused by key, nothing written."""
+    paths = _short_native_recordings(tmp_path, 120, count=2)
+    d = diagnose(DiagnoseConfig(model=PENDULUM, recordings=(paths[0],), heldout=(paths[1],), out=str(tmp_path / "d"),
+                                plots=False, progress=False, targets=("motor",),
+                                effects=("none", "coulomb_friction", "motor_lag", "action_delay")))
+    searched = {(e["effect"], e["target"]) for e in d["effects"]}
+    assert searched == {("motor_lag", "motor"), ("action_delay", "")}, searched
+    with pytest.raises(ValueError, match=r"targets: \['hinj'\] name no joint, actuator or body.*hinge"):
+        diagnose(DiagnoseConfig(model=PENDULUM, recordings=(paths[0],), out=str(tmp_path / "e"), plots=False,
+                                progress=False, targets=("hinj",)))
+    assert not os.path.exists(tmp_path / "e")

@@ -51,6 +51,10 @@ class DiagnoseConfig:
         and only if sim2real made it).
       overwrite: replace an existing output folder this tool made.
       effects: candidate effects searched (default: the whole library).
+      targets: joints, actuators and bodies (by name) whose effects are searched (default: all);
+        global effects (``action_delay``) are always searched. The loop passes those its
+        training env can express (an env that randomises its actuated joints only has no
+        counterpart for an effect on a free root joint).
       window_seconds: Savitzky-Golay window for velocity estimates (0: chosen from the noise).
       horizon_seconds: length of the multiple-shooting predictions (0: chosen from the data).
       val_fraction: tail of each training recording held back to judge candidates.
@@ -80,6 +84,7 @@ class DiagnoseConfig:
     out: str = "runs/diagnosis"
     overwrite: bool = False
     effects: tuple[str, ...] = EFFECTS
+    targets: tuple[str, ...] = ()
     window_seconds: float = 0.0
     horizon_seconds: float = 0.0
     val_fraction: float = 0.3
@@ -235,6 +240,9 @@ def discretization_level(system: System, trajs, sh: Shooting, seconds: float = 0
     return float(np.mean(e**2)) if e.size else 0.0
 
 
+MIN_HORIZON = 5  # samples: the shortest prediction that still sees a force act on the motion
+
+
 def choose_horizon(system: System, trajs, budget: int = 6000, max_seconds: float = 2.0) -> int:
     """Prediction horizon (samples) from the data, the longest of 0.05 .. 2 s that passes three checks.
 
@@ -305,14 +313,24 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             system = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay, substeps=n)
         bar.step(text="choosing the prediction horizon")
         H = (int(round(cfg.horizon_seconds / dt)) if cfg.horizon_seconds > 0 else choose_horizon(system, trajs))
-        H = max(5, H)
+        H = chosen_H = max(MIN_HORIZON, H)
         heldout_idx = tuple(range(len(train), len(trajs)))
-        sh = Shooting(system, trajs, H, heldout=heldout_idx, val_fraction=cfg.val_fraction)
-        for need in ("fit", "val"):
-            if len(sh.tiles.of(need)) < 2:
+        while True:
+            sh = Shooting(system, trajs, H, heldout=heldout_idx, val_fraction=cfg.val_fraction)
+            lacking = [(need, len(sh.tiles.of(need))) for need in ("fit", "val") if len(sh.tiles.of(need)) < 2]
+            if not lacking:
+                break
+            # a chosen horizon longer than short recordings allow (a policy that falls at once) is
+            # shortened; a horizon the user set is not
+            if cfg.horizon_seconds > 0 or H <= MIN_HORIZON:
+                need, k = lacking[0]
                 raise RecordingError(f"the training recordings are too short for {H}-sample predictions "
-                                     f"({len(sh.tiles.of(need))} {need} segments); record longer, or set "
-                                     "horizon_seconds= shorter")
+                                     f"({k} {need} segments); record longer"
+                                     + (", or set horizon_seconds= shorter" if H > MIN_HORIZON else ""))
+            H = max(MIN_HORIZON, H // 2)
+        if H < chosen_H:
+            system.notes.append(f"prediction horizon shortened to {H} samples ({H * dt:.3g} s) from {chosen_H}: "
+                                "the recordings are too short for the horizon the data chose")
         spec = system.spec
         scales = {n: max(abs(float(spec[n].default)), 1e-6) for n in system.nominal}
         fitter = Fitter(sh, scales)
@@ -324,6 +342,15 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         pred0 = sh.predict(z0[None], fitter.v_hat[None], all_train)
         sc = scales_from(system, trajs[: len(train)], pred0["force"][0].reshape(-1, system.mj.nu))
         cands = library(system, sc, tuple(cfg.effects))
+        if cfg.targets:
+            m = system.mj
+            names = {mujoco.mj_id2name(m, kind, i) for kind, n in ((mujoco.mjtObj.mjOBJ_JOINT, m.njnt),
+                     (mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu), (mujoco.mjtObj.mjOBJ_BODY, m.nbody)) for i in range(n)}
+            unknown = [t for t in cfg.targets if t not in names]
+            if unknown:
+                raise ValueError(f"targets: {unknown} name no joint, actuator or body of {cfg.model} (effects "
+                                 f"can attach to: {', '.join(sorted({c.target for c in cands} - {''}))})")
+            cands = [c for c in cands if not c.target or c.target in cfg.targets]
         bar.step(text="fitting")
         sel = Selector(fitter, system.nominal, cands,
                        SelectConfig(cfg.min_gain, cfg.min_t, cfg.floor_level, cfg.strong, cfg.top, cfg.max_effects,

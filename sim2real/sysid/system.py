@@ -52,7 +52,7 @@ def check_model(m: mujoco.MjModel, xml_path: str) -> None:
                              "transmissions are not supported)")
         if not mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a):
             raise ModelError(f"{xml_path}: actuator #{a} has no name; name every actuator")
-        if m.actuator_dyntype[a] in (mujoco.mjtDyn.mjDYN_MUSCLE, mujoco.mjtDyn.mjDYN_USER):
+        if int(m.actuator_dyntype[a]) in (int(mujoco.mjtDyn.mjDYN_MUSCLE), int(mujoco.mjtDyn.mjDYN_USER)):
             raise ModelError(f"{xml_path}: actuator #{a}: muscle/user dynamics are not supported")
 
 
