@@ -37,6 +37,7 @@ import time
 import numpy as np
 
 from sim2real.common.cli import settings
+from sim2real.sysid.recordings import RecordingError
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -110,6 +111,7 @@ class Settings:
     only_seeds: str = ""
     device: str = "2 CPU cores"
 
+NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
 METHODS = ("nominal", "oracle", "udr_wide", "lsdr", "simopt", "diag_dr_1", "diag_dr_2")
 
 
@@ -176,20 +178,24 @@ def main(args: Settings):
     if not needs_nominal - {"nominal"}:
         return write(args, setup, rows, diagnoses, seconds)
     # the one real budget: 3 episodes of each seed's nominal policy; SimOpt compares at the env's
-    # control step, so it reads the same recordings every frame_skip-th row
-    from sim2real.envs.registry import env_class
+    # control step, so it reads the same recordings thinned to that step (the plant logs finer: the
+    # hopper's at 250 Hz against a 125 Hz control step, not its frame_skip of physics steps)
+    from sim2real.envs import make
     from sim2real.tools.record import from_run, save
 
-    frame_skip = base.env_options.get("frame_skip", env_class(base.env).default_config.frame_skip)
+    env_dt = make(base.env, **dict(base.env_options)).dt
     ctrl_rate = {}
     for s in per_seed:
         rolls, what = from_run(nominal, plant, 3, seed=100 + s, run_seed=s, noise=1e-3)
         save(rolls, what, os.path.join(work, f"rec_nominal_{s}"))
-        ctrl_rate[s] = save(rolls.every(frame_skip), what, os.path.join(work, f"rec_nominal_{s}_ctrl"))
+        k = int(round(env_dt / rolls.dt))
+        if k < 1 or abs(k * rolls.dt - env_dt) > 1e-6 * env_dt:
+            raise SystemExit(f"the plant's log step {rolls.dt:g} s does not divide the env's control step {env_dt:g} s")
+        ctrl_rate[s] = save(rolls.every(k), what, os.path.join(work, f"rec_nominal_{s}_ctrl"))
     if "simopt" in methods:
         t = time.time()
         so = setup["simopt"]
-        rets = []
+        rets, ran = [], []
         for s in per_seed:
             paths = ctrl_rate[s]
             cfg = dataclasses.replace(
@@ -198,28 +204,48 @@ def main(args: Settings):
                 algo_options=dict(real="recordings", recordings=list(paths), init_std=list(so["init_std"]),
                                   init_ppo_updates=int(base.total_steps // base.ppo.batch_size) - 100,
                                   ppo_updates=100, real_rollouts=3))
-            res = train(cfg)
+            try:
+                res = train(cfg)
+            except RecordingError as e:  # e.g. the nominal policy falls before SimOpt has enough samples
+                NOTES[f"simopt seed {s}"] = f"not run: the nominal policy's 3 recordings cannot feed SimOpt ({e})"
+                print(f"    simopt seed {s}: " + NOTES[f"simopt seed {s}"], flush=True)
+                continue
             rets += _scores(res["run_dir"], plant, args.episodes, 1)
+            ran.append(s)
         seconds["simopt"] = seconds.get("simopt", 0.0) + time.time() - t
-        add("simopt", rets, per_seed)
+        if rets:
+            add("simopt", rets, ran)
     if "diag_dr_1" in methods or "diag_dr_2" in methods:
         t = time.time()
-        r1, r2 = [], []
+        r1, r2, s1, s2 = [], [], [], []
         for s in per_seed:
             b = dataclasses.replace(base, seed=s)
-            it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
-                                 run_seed=s, noise=1e-3)
+            try:
+                it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
+                                     run_seed=s, noise=1e-3)
+            except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
+                NOTES[f"diag_dr_1 seed {s}"] = f"not run: the diagnosis refused the nominal policy's recordings ({e})"
+                print(f"    diag_dr_1 seed {s}: " + NOTES[f"diag_dr_1 seed {s}"], flush=True)
+                continue
             diagnoses[f"seed{s}_iter1"] = it1["diagnosis"]
             r1 += _scores(it1["run"], plant, args.episodes, 1)
+            s1.append(s)
             if "diag_dr_2" in methods:
-                it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
-                                     seed=200 + s, noise=1e-3)
+                try:
+                    it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
+                                         seed=200 + s, noise=1e-3)
+                except RecordingError as e:
+                    NOTES[f"diag_dr_2 seed {s}"] = f"not run: the diagnosis refused the first loop's recordings ({e})"
+                    print(f"    diag_dr_2 seed {s}: " + NOTES[f"diag_dr_2 seed {s}"], flush=True)
+                    continue
                 diagnoses[f"seed{s}_iter2"] = it2["diagnosis"]
                 r2 += _scores(it2["run"], plant, args.episodes, 1)
+                s2.append(s)
         seconds["diag_dr"] = seconds.get("diag_dr", 0.0) + time.time() - t
-        add("diag_dr_1", r1, per_seed)
+        if r1:
+            add("diag_dr_1", r1, s1)
         if r2:
-            add("diag_dr_2", r2, per_seed)
+            add("diag_dr_2", r2, s2)
     write(args, setup, rows, diagnoses, seconds)
 
 
@@ -242,6 +268,12 @@ def _earlier(args, methods, per_seed):
         raise SystemExit(f"merge=true: no earlier results to merge with ({e.filename})") from None
     if {"diag_dr_1", "diag_dr_2"} & set(methods):
         diagnoses = {k: v for k, v in diagnoses.items() if int(k[4:].split("_")[0]) not in per_seed}
+    try:  # methods not run, and why (kept unless this call runs them again)
+        with open(os.path.join(out, "notes.json")) as f:
+            NOTES.update({k: v for k, v in json.load(f).items()
+                          if not (k.split()[0] in methods and int(k.split()[-1]) in per_seed)})
+    except FileNotFoundError:
+        pass
     seconds = {}
     try:
         with open(os.path.join(out, "seconds.json")) as f:
@@ -279,6 +311,9 @@ def write(args, setup, rows, diagnoses, seconds, quiet=False):
         gap = (np.mean(v) - nominal) / (oracle - nominal) if np.isfinite(oracle) and oracle != nominal else np.nan
         lines.append(f"| {m} | {np.mean(v):.1f} | {np.min(v):.1f} | {np.max(v):.1f} | {100 * gap:.0f}% |")
     lines += ["", f"Seconds ({args.device}): " + ", ".join(f"{k} {v:.0f}" for k, v in seconds.items())]
+    lines += [f"\n{m}: {text}" for m, text in NOTES.items()]
+    with open(os.path.join(out, "notes.json"), "w") as f:
+        json.dump(NOTES, f, indent=2)
     with open(os.path.join(out, "summary.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
     if not quiet:
