@@ -38,6 +38,7 @@ def _load(name):
     return mod
 
 
+@pytest.mark.slow  # ~100 s: the benchmark script end to end; every method's settings are built in the fast set
 def test_toy_leaderboard_runs_every_method_through_the_driver(tmp_path):
     mod = _load("dr_leaderboard")
     from sim2real.common.config import load
