@@ -207,8 +207,7 @@ def main(args: Settings):
             try:
                 res = train(cfg)
             except RecordingError as e:  # e.g. the nominal policy falls before SimOpt has enough samples
-                NOTES[f"simopt seed {s}"] = f"not run: the nominal policy's 3 recordings cannot feed SimOpt ({e})"
-                print(f"    simopt seed {s}: " + NOTES[f"simopt seed {s}"], flush=True)
+                _not_run("simopt", s, f"the nominal policy's 3 recordings cannot feed SimOpt ({e})")
                 continue
             rets += _scores(res["run_dir"], plant, args.episodes, 1)
             ran.append(s)
@@ -224,8 +223,7 @@ def main(args: Settings):
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
                                      run_seed=s, noise=1e-3)
             except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
-                NOTES[f"diag_dr_1 seed {s}"] = f"not run: the diagnosis refused the nominal policy's recordings ({e})"
-                print(f"    diag_dr_1 seed {s}: " + NOTES[f"diag_dr_1 seed {s}"], flush=True)
+                _not_run("diag_dr_1", s, f"the diagnosis refused the nominal policy's recordings ({e})")
                 continue
             diagnoses[f"seed{s}_iter1"] = it1["diagnosis"]
             r1 += _scores(it1["run"], plant, args.episodes, 1)
@@ -235,8 +233,7 @@ def main(args: Settings):
                     it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
                                          seed=200 + s, noise=1e-3)
                 except RecordingError as e:
-                    NOTES[f"diag_dr_2 seed {s}"] = f"not run: the diagnosis refused the first loop's recordings ({e})"
-                    print(f"    diag_dr_2 seed {s}: " + NOTES[f"diag_dr_2 seed {s}"], flush=True)
+                    _not_run("diag_dr_2", s, f"the diagnosis refused the first loop's recordings ({e})")
                     continue
                 diagnoses[f"seed{s}_iter2"] = it2["diagnosis"]
                 r2 += _scores(it2["run"], plant, args.episodes, 1)
@@ -247,6 +244,11 @@ def main(args: Settings):
         if r2:
             add("diag_dr_2", r2, s2)
     write(args, setup, rows, diagnoses, seconds)
+
+
+def _not_run(method: str, seed: int, why: str) -> None:
+    NOTES[f"{method} seed {seed}"] = "not run: " + why
+    print(f"    {method} seed {seed}: not run: {why}", flush=True)
 
 
 def _earlier(args, methods, per_seed):

@@ -11,8 +11,7 @@ import mujoco
 import numpy as np
 
 from sim2real.physics import kinds
-from sim2real.physics.kinds.backlash import inertia_params as backlash_inertia_params  # noqa: F401
-from sim2real.physics.kinds.backlash import stiffness_params as backlash_stiffness_params  # noqa: F401
+from sim2real.physics.kinds.backlash import motor_side_params as backlash_motor_side_params  # noqa: F401
 from sim2real.physics.kinds.base import name_of, unit_for
 from sim2real.physics.kinds.gain import declare as actuator_gain_params  # noqa: F401
 from sim2real.physics.kinds.gain import gain_law_entries, is_servo  # noqa: F401

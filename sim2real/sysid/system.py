@@ -113,8 +113,7 @@ class System:
                                   p.unit, "declared friction loss (Coulomb level)", "coulomb", p.index)
         params += effect
         params += catalog.payload_position_params(m, moving)
-        params += catalog.backlash_inertia_params(m, range(m.nu))
-        params += catalog.backlash_stiffness_params(m, range(m.nu))
+        params += catalog.backlash_motor_side_params(m, range(m.nu))
         if declared_fl:
             m.dof_frictionloss[:] = 0.0
             self.notes.append("declared frictionloss (" + ", ".join(f"{jn[j]} {v:g}" for j, v in declared_fl.items())

@@ -84,12 +84,13 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
     rolls, what = from_run(run_dir, target, episodes, seed, run_seed, noise, deterministic)
     paths = save(rolls, what, os.path.join(out, "recordings"))
     model = env_model_path(env_class(base.env))
-    # only effects the training env can express: its physics names them as ``kind:target``
+    # only effects the training env can express: its physics names them as ``kind:target`` (the
+    # targets are names in its own MJCF, which the diagnosis checks)
     env_targets = sorted({n.split(":", 1)[1] for n in make(base.env, **dict(base.env_options)).spec.names if ":" in n})
     dcfg = config_lib.load(DiagnoseConfig, [f"model={model}", f"recordings=[{','.join(paths[:-1])}]",
                                             f"heldout=[{paths[-1]}]", f"out={os.path.join(out, 'diagnosis')}",
                                             f"progress={str(progress).lower()}"] + list(diagnose_options))
-    dcfg = dataclasses.replace(dcfg, targets=tuple(t for t in env_targets if t in _diagnosable(model)))
+    dcfg = dataclasses.replace(dcfg, targets=tuple(env_targets))
     d = diagnose(dcfg)
     cfg = dataclasses.replace(base, name="run", out_dir=out, resume=False, overwrite=False, progress=progress,
                               dr=dataclasses.replace(base.dr, from_diagnosis=os.path.join(out, "diagnosis")))
@@ -99,17 +100,3 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
                           "selected": [{"effect": s["effect"], "target": s["target"], "params": s["params"]}
                                        for s in d["selected"]],
                           "fitted_params": d["fitted_params"], "heldout_nrmse": [d["fit"]["before"], d["fit"]["after"]]}}
-
-
-def _diagnosable(model_path: str) -> set[str]:
-    """Names in the MJCF that the diagnosis' effects can attach to: hinge and slide joints,
-    actuators, moving bodies."""
-    import mujoco
-
-    m = mujoco.MjModel.from_xml_path(model_path)
-    name = lambda kind, i: mujoco.mj_id2name(m, kind, i)  # noqa: E731
-    joints = {name(mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(m.njnt)
-              if int(m.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))}
-    acts = {name(mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(m.nu)}
-    bodies = {name(mujoco.mjtObj.mjOBJ_BODY, b) for b in range(1, m.nbody)}
-    return {n for n in joints | acts | bodies if n}

@@ -11,32 +11,23 @@ from sim2real.physics.kinds.gain import nominal_gain
 from sim2real.physics.params import Param
 
 
-def inertia_params(m: mujoco.MjModel, actuators, default: float = 1e-2) -> list[Param]:
-    """``backlash_inertia:<act>``: the motor side's inertia crossing a backlash dead band (reflected
-    to the joint); defaults to the joint's armature, or ``default`` where it has none (the
-    effects library's fixed guess), so the default is neutral."""
-    ps = []
+def motor_side_params(m: mujoco.MjModel, actuators, default: float = 1e-2) -> list[Param]:
+    """``backlash_inertia:<act>`` then ``backlash_stiffness:<act>`` for every actuator (reflected to
+    the joint). The inertia of the motor side crossing the dead band defaults to the joint's
+    armature, or ``default`` where it has none (the effects library's fixed guess), so the default
+    is neutral; the mesh's stiffness beyond the band defaults to 0, a rigid mesh."""
+    inertia, stiffness = [], []
     for a in actuators:
         j = int(m.actuator_trnid[a, 0])
         arm = float(m.dof_armature[m.jnt_dofadr[j]])
         slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
-        ps.append(Param(f"backlash_inertia:{name_of(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)}", arm if arm > 0 else default,
-                        1e-7, 1e4, "kg" if slide else "kg m^2", "inertia of the motor side crossing the backlash band",
-                        "backlash_inertia", a))
-    return ps
-
-
-def stiffness_params(m: mujoco.MjModel, actuators) -> list[Param]:
-    """``backlash_stiffness:<act>``: the mesh's stiffness beyond the dead band (reflected to the
-    joint); 0 (the default) is a rigid mesh."""
-    ps = []
-    for a in actuators:
-        j = int(m.actuator_trnid[a, 0])
-        slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
-        ps.append(Param(f"backlash_stiffness:{name_of(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)}", 0.0, 0.0, 1e9,
-                        "N/m" if slide else "Nm/rad", "stiffness of the mesh beyond the backlash band (0: rigid)",
-                        "backlash_stiffness", a))
-    return ps
+        name = name_of(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)
+        inertia.append(Param(f"backlash_inertia:{name}", arm if arm > 0 else default, 1e-7, 1e4,
+                             "kg" if slide else "kg m^2", "inertia of the motor side crossing the backlash band",
+                             "backlash_inertia", a))
+        stiffness.append(Param(f"backlash_stiffness:{name}", 0.0, 0.0, 1e9, "N/m" if slide else "Nm/rad",
+                               "stiffness of the mesh beyond the backlash band (0: rigid)", "backlash_stiffness", a))
+    return inertia + stiffness
 
 
 # damping ratio of the motor side's mode on a compliant mesh (a common modelling choice for a gear
