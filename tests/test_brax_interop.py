@@ -55,3 +55,19 @@ def test_brax_ppo_trains_on_a_sim2real_env_unchanged():
     act = make_policy(params, deterministic=True)
     a, _ = act(jnp.zeros((1, env.observation_size)), jax.random.PRNGKey(0))
     assert a.shape == (1, env.action_size) and np.all(np.abs(np.asarray(a)) <= 1.0)
+
+
+@pytest.mark.slow  # Brax's compilation, as above (make test-slow)
+def test_brax_sac_trains_on_a_sim2real_env_unchanged():
+    """Brax's off-policy SAC through the same wrapper: its replay buffer is filled by the adapter's
+    step, physics redrawn at every reset, and it returns a policy inside the action bounds."""
+    from brax.training.agents.sac import train as sac
+
+    env = BraxEnv("pendulum", physics={"mass:pole": (0.5, 2.0)})
+    make_policy, params, metrics = sac.train(
+        env, num_timesteps=1024, episode_length=50, num_envs=8, batch_size=32, min_replay_size=128,
+        max_replay_size=2048, grad_updates_per_step=1, num_evals=2, wrap_env_fn=wrap_for_training, seed=0)
+    assert np.isfinite(float(metrics["eval/episode_reward"]))
+    act = make_policy(params, deterministic=True)
+    a, _ = act(jnp.zeros((1, env.observation_size)), jax.random.PRNGKey(0))
+    assert a.shape == (1, env.action_size) and np.all(np.abs(np.asarray(a)) <= 1.0)
