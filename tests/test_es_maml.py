@@ -87,16 +87,20 @@ def udr_run(tmp_path_factory):
     return train(driver_config(tmp_path_factory.mktemp("udr"), "name=udr", "total_steps=128"))
 
 
+def _es_overrides(udr_run):
+    per_update = 4 * (2 * 64 + 20)  # population x (inner updates x batch + one 20-step scoring episode)
+    es = ["algo=es_maml", "num_seeds=2", "updates_per_chunk=1", f"total_steps={2 * per_update}",
+          f"algo_options={{population: 4, inner_updates: 2, warm_start: {udr_run['run_dir']}}}"]
+    return es, per_update
+
+
 def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tmp_path, udr_run):
     """algo=es_maml through scripts/train.py's driver: the jitted meta step vmapped over 2 seeds,
     warm-started from a 1-seed uniform-DR run, interrupted and resumed = uninterrupted."""
     from sim2real.training.driver import train
 
-    per_update = 4 * (2 * 64 + 20)  # population x (inner updates x batch + one 20-step scoring episode)
-    es = ["algo=es_maml", "num_seeds=2", "updates_per_chunk=1", f"total_steps={2 * per_update}",
-          f"algo_options={{population: 4, inner_updates: 2, warm_start: {udr_run['run_dir']}}}"]
-    test = ["test.every=100", "test.params=[mass:carriage]", "test.points=[[60],[140]]", "test.adapt=true"]
-    full = train(driver_config(tmp_path, *es, *test, "name=full"))
+    es, per_update = _es_overrides(udr_run)
+    full = train(driver_config(tmp_path, *es, "name=full"))
     train(driver_config(tmp_path, *es, "name=part", "max_chunks=1"))
     resumed = train(driver_config(tmp_path, *es, "name=part", "resume=true"))
 
@@ -113,9 +117,17 @@ def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tm
     assert [int(r["env_steps"]) for r in rows if r["seed"] == "0"] == [per_update, 2 * per_update]
     assert all(np.isfinite(float(r["fitness_mean"])) for r in rows)
 
-    # the driver's test section scored the policies after adaptation (test.adapt=true): the
-    # adapted policies' returns, not those of the meta-policies themselves
-    from sim2real.training.driver import make_tester
+
+@pytest.mark.slow  # three more compilations of the adapting tester (make test-slow)
+def test_the_driver_scores_adapted_policies_with_test_adapt(tmp_path, udr_run):
+    """The driver's test section with test.adapt=true scores the policies after adaptation: the
+    adapted policies' returns, not those of the meta-policies themselves; an algorithm without an
+    adaptation operator is refused."""
+    from sim2real.training.driver import make_tester, train
+
+    es, _ = _es_overrides(udr_run)
+    test = ["test.every=100", "test.params=[mass:carriage]", "test.points=[[60],[140]]", "test.adapt=true"]
+    full = train(driver_config(tmp_path, *es, *test, "name=full"))
     scored = np.load(os.path.join(full["run_dir"], "test.npz"))["returns"][-1]            # [S, 2]
     cfg = driver_config(tmp_path, *es, *test)
     adapted = np.asarray(make_tester(cfg, full["env"], full["algo"])[0](full["state"]))
