@@ -143,8 +143,9 @@ class PPO:
         k_net, k_run, k_next = jax.random.split(key, 3)
         _, params = networks.init_params(k_net, self.cfg.net, self.env.obs_size, len(self.ctx), self.env.action_size)
         runner = init_runner(self.env, k_run, self.cfg.num_envs, sample, networks.carry_size(self.cfg.net))
-        return PPOState(params, self.tx.init(params), normalize.init(self.env.obs_size), runner, k_next,
-                        jnp.zeros((), jnp.int32))
+        st = PPOState(params, self.tx.init(params), normalize.init(self.env.obs_size), runner, k_next,
+                      jnp.zeros((), jnp.int32))
+        return data_parallel.place(self, st) if self.cfg.data_parallel else st
 
     def update(self, st: PPOState, sample: Callable):
         """One PPO iteration: collect with ``sample`` for resets, then learn. Returns ``(state, metrics)``."""
