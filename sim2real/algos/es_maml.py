@@ -26,7 +26,6 @@ import jax
 import jax.flatten_util
 import jax.numpy as jnp
 import optax
-from evosax.algorithms import Open_ES
 from flax import struct
 
 from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
@@ -88,6 +87,10 @@ class ESMAML(OuterLoop):
         self.horizon = cfg.eval_horizon or env.config.episode_length
         self.eval_env = with_horizon(env, self.horizon)
         _, template = networks.init_params(jax.random.PRNGKey(0), ppo_cfg.net, env.obs_size, 0, env.action_size)
+        # (imported here: importing evosax.algorithms starts JAX's backends, after which the CPU
+        # device count that ppo.split_envs / data_parallel ask for can no longer be set)
+        from evosax.algorithms import Open_ES
+
         self.es = Open_ES(population_size=cfg.population, solution=template, use_antithetic_sampling=True,
                           optimizer=optax.adam(cfg.meta_lr), std_schedule=optax.constant_schedule(cfg.sigma))
         self.es_params = self.es.default_params
@@ -182,7 +185,7 @@ class ESMAML(OuterLoop):
         return c.population * (c.inner_updates * self.ppo.cfg.batch_size + c.eval_episodes * self.horizon)
 
 
-def grad_estimate(es: Open_ES, es_params, es_state, fitness_fn, key):
+def grad_estimate(es, es_params, es_state, fitness_fn, key):
     """``1/(N sigma) sum_i f(theta + sigma g_i) g_i`` for one antithetic population, with raw
     (unshaped) fitness ``fitness_fn(params)`` — the estimator OpenES applies (tests check it)."""
     pop, _ = es.ask(key, es_state, es_params)
