@@ -43,30 +43,24 @@ def test_wrapping_is_refused_with_brax_randomization_or_another_env():
         BraxEnv("pendulum", physics={"mass:nothing": (0.5, 2.0)})
 
 
-@pytest.mark.slow  # ~1 min on 2 cores, mostly Brax's compilation (make test-slow)
-def test_brax_ppo_trains_on_a_sim2real_env_unchanged():
-    from brax.training.agents.ppo import train as ppo
+# Brax's own trainers, tiny budgets: the adapter's step fills PPO's rollouts and SAC's replay
+# buffer, physics redrawn at every reset
+BRAX_AGENTS = {
+    "ppo": dict(num_timesteps=2048, episode_length=50, num_envs=16, batch_size=16, unroll_length=8,
+                num_minibatches=2, num_updates_per_batch=2, num_evals=2),
+    "sac": dict(num_timesteps=1024, episode_length=50, num_envs=8, batch_size=32, min_replay_size=128,
+                max_replay_size=2048, grad_updates_per_step=1, num_evals=2),
+}
 
+
+@pytest.mark.slow  # ~30-60 s each on 2 cores, mostly Brax's compilation (make test-slow)
+@pytest.mark.parametrize("agent", sorted(BRAX_AGENTS))
+def test_brax_agents_train_on_a_sim2real_env_unchanged(agent):
+    import importlib
+
+    trainer = importlib.import_module(f"brax.training.agents.{agent}.train")
     env = BraxEnv("pendulum", physics={"mass:pole": (0.5, 2.0)})
-    make_policy, params, metrics = ppo.train(
-        env, num_timesteps=2048, episode_length=50, num_envs=16, batch_size=16, unroll_length=8,
-        num_minibatches=2, num_updates_per_batch=2, num_evals=2, wrap_env_fn=wrap_for_training, seed=0)
-    assert np.isfinite(float(metrics["eval/episode_reward"]))
-    act = make_policy(params, deterministic=True)
-    a, _ = act(jnp.zeros((1, env.observation_size)), jax.random.PRNGKey(0))
-    assert a.shape == (1, env.action_size) and np.all(np.abs(np.asarray(a)) <= 1.0)
-
-
-@pytest.mark.slow  # Brax's compilation, as above (make test-slow)
-def test_brax_sac_trains_on_a_sim2real_env_unchanged():
-    """Brax's off-policy SAC through the same wrapper: its replay buffer is filled by the adapter's
-    step, physics redrawn at every reset, and it returns a policy inside the action bounds."""
-    from brax.training.agents.sac import train as sac
-
-    env = BraxEnv("pendulum", physics={"mass:pole": (0.5, 2.0)})
-    make_policy, params, metrics = sac.train(
-        env, num_timesteps=1024, episode_length=50, num_envs=8, batch_size=32, min_replay_size=128,
-        max_replay_size=2048, grad_updates_per_step=1, num_evals=2, wrap_env_fn=wrap_for_training, seed=0)
+    make_policy, params, metrics = trainer.train(env, wrap_env_fn=wrap_for_training, seed=0, **BRAX_AGENTS[agent])
     assert np.isfinite(float(metrics["eval/episode_reward"]))
     act = make_policy(params, deterministic=True)
     a, _ = act(jnp.zeros((1, env.observation_size)), jax.random.PRNGKey(0))
