@@ -109,15 +109,20 @@ def update(ppo, st, sample):
     return st, metrics, ep
 
 
+def _state_shardings(ppo):
+    """``(split, whole)``: the runner's sharding (its env axis over the mesh) and everything else's
+    (replicated on the mesh)."""
+    mesh = parallel.batch_sharding(ppo.cfg.num_envs).mesh
+    return jax.sharding.NamedSharding(mesh, parallel.ENVS), jax.sharding.NamedSharding(mesh, PartitionSpec())
+
+
 def place(ppo, st):
     """``st`` (inside ``jit``, per seed) constrained to the shardings ``update`` returns: the runner
     split along its env axis over the mesh, everything else replicated on it. A state built
     without them (committed to one device) has other input shardings than every later update's
     output, so the training driver's jitted chunk compiled a second time on its second call (a
     whole compilation: 29 s of a 4.6 s chunk for hopper on 2 CPU devices)."""
-    mesh = parallel.batch_sharding(ppo.cfg.num_envs).mesh
-    split = jax.sharding.NamedSharding(mesh, parallel.ENVS)
-    whole = jax.sharding.NamedSharding(mesh, PartitionSpec())
+    split, whole = _state_shardings(ppo)
     runner = jax.tree_util.tree_map(lambda x: jax.lax.with_sharding_constraint(x, split), st.runner)
     rest = jax.tree_util.tree_map(lambda x: jax.lax.with_sharding_constraint(x, whole), st.replace(runner=None))
     return rest.replace(runner=runner)
@@ -129,8 +134,7 @@ def globalize(ppo, st):
     processes run the same program (``jax.distributed.initialize``, one process per host or per
     GPU): each process holds only its devices' parts. Every process must pass the same ``st``
     (same seed, same config); it keeps only what its devices hold."""
-    mesh = parallel.batch_sharding(ppo.cfg.num_envs).mesh
-    split, whole = jax.sharding.NamedSharding(mesh, parallel.ENVS), jax.sharding.NamedSharding(mesh, PartitionSpec())
+    split, whole = _state_shardings(ppo)
 
     def put(x, sharding):
         if isinstance(x, jax.Array) and x.sharding == sharding:  # placed so by ``PPO.init`` already

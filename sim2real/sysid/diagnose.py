@@ -303,6 +303,11 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         check_sample_rate(held, dt, "the training recordings")
         max_delay = max(16, int(math.ceil(0.12 / dt)))
         system = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay)
+        unknown = [t for t in cfg.targets if t not in {*system.joints, *system.actuators, *system.bodies}]
+        if unknown:  # (before any simulation: a misspelt name costs nothing)
+            raise ValueError(f"targets: {unknown} name no joint, actuator or body of {cfg.model} (joints: "
+                             f"{', '.join(system.joints)}; actuators: {', '.join(system.actuators) or 'none'}; "
+                             f"bodies: {', '.join(system.bodies[1:])})")
         for r in train + held:
             system.check_recording_covers(r)
         window = int(round(cfg.window_seconds / dt)) | 1 if cfg.window_seconds > 0 else None
@@ -343,13 +348,6 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         sc = scales_from(system, trajs[: len(train)], pred0["force"][0].reshape(-1, system.mj.nu))
         cands = library(system, sc, tuple(cfg.effects))
         if cfg.targets:
-            m = system.mj
-            names = {mujoco.mj_id2name(m, kind, i) for kind, n in ((mujoco.mjtObj.mjOBJ_JOINT, m.njnt),
-                     (mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu), (mujoco.mjtObj.mjOBJ_BODY, m.nbody)) for i in range(n)}
-            unknown = [t for t in cfg.targets if t not in names]
-            if unknown:
-                raise ValueError(f"targets: {unknown} name no joint, actuator or body of {cfg.model} (effects "
-                                 f"can attach to: {', '.join(sorted({c.target for c in cands} - {''}))})")
             cands = [c for c in cands if not c.target or c.target in cfg.targets]
         bar.step(text="fitting")
         sel = Selector(fitter, system.nominal, cands,
