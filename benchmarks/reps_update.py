@@ -34,10 +34,12 @@ class Settings:
     out: str = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "reps_update.csv")
 
 
-def main(args: Settings):
+def setup(samples: int, steps: int, real_rollouts: int, spread: bool = False):
+    """``(simopt, state, real)``: SimOpt on hopper with 5 hidden parameters at 1.4x their defaults,
+    ``real_rollouts`` target rollouts of ``steps`` steps; ``spread``: the samples split over the
+    host's devices (``ppo.data_parallel``, ``parallel.spread``)."""
     import jax
     import jax.numpy as jnp
-    import numpy as np
 
     from sim2real.algos.base import DRConfig
     from sim2real.algos.simopt import SimOpt, SimOptConfig
@@ -53,14 +55,23 @@ def main(args: Settings):
                   high=tuple(3.0 * m if m > 0 else 1.0 for m in mu0))
     truth = {n: (1.4 * m if m > 0 else 0.3) for n, m in zip(names, mu0)}
     zt = jnp.asarray(env.z_of(**truth))
+    cfg = SimOptConfig(init_std=tuple(0.2 * m if m > 0 else 0.1 for m in mu0), num_samples=samples,
+                       horizon=steps, real_rollouts=real_rollouts, eval_episodes=0)
+    so = SimOpt(env, PPOConfig(num_envs=8, num_steps=8, num_minibatches=4, net=NetConfig(hidden=(64, 64)),
+                               data_parallel=spread), dr, cfg)
+    st = jax.jit(so.init)(jax.random.PRNGKey(0))
+    real = jax.jit(lambda s: so.target_rollouts(s, zt, jax.random.PRNGKey(1), real_rollouts))(st)
+    return so, st, real
+
+
+def main(args: Settings):
+    import jax
+    import numpy as np
+
     device = jax.devices()[0].device_kind
     rows = []
     for R in args.real:
-        cfg = SimOptConfig(init_std=tuple(0.2 * m if m > 0 else 0.1 for m in mu0), num_samples=args.samples,
-                           horizon=args.steps, real_rollouts=R, eval_episodes=0)
-        so = SimOpt(env, PPOConfig(num_envs=8, num_steps=8, net=NetConfig(hidden=(64, 64))), dr, cfg)
-        st = jax.jit(so.init)(jax.random.PRNGKey(0))
-        real = jax.jit(lambda s: so.target_rollouts(s, zt, jax.random.PRNGKey(1), R))(st)
+        so, st, real = setup(args.samples, args.steps, R)
         step = jax.jit(so.reps_step)
         t0 = time.perf_counter()
         s2, info = step(st, real)

@@ -30,6 +30,7 @@ from flax import struct
 
 from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.algos.registry import register
+from sim2real.envs import parallel
 from sim2real.envs.base import Env
 from sim2real.rl.episodes import episodes, with_horizon
 from sim2real.rl import networks, normalize
@@ -83,7 +84,12 @@ class ESMAML(OuterLoop):
         self.env, self.cfg = env, cfg
         self.space = DRSpace(env, dr)
         # the inner loop's step size is part of U and must not decay with the meta-iterations
-        self.ppo = PPO(env, dataclasses.replace(ppo_cfg, anneal_lr=False), 1)
+        self.ppo = PPO(env, dataclasses.replace(ppo_cfg, anneal_lr=False, split_envs=False, data_parallel=False), 1)
+        # with ppo.split_envs / data_parallel the population is split over the host's devices,
+        # each member's inner loop whole on one device (members are independent: no communication)
+        self.spreads = ppo_cfg.spreads
+        if self.spreads:  # before any trace (the multi-GPU partitioner setting, envs/parallel.py)
+            parallel.batch_devices(cfg.population)
         self.horizon = cfg.eval_horizon or env.config.episode_length
         self.eval_env = with_horizon(env, self.horizon)
         _, template = networks.init_params(jax.random.PRNGKey(0), ppo_cfg.net, env.obs_size, 0, env.action_size)
@@ -162,12 +168,13 @@ class ESMAML(OuterLoop):
         keys = jax.random.split(k_inner, half)
         keys = jnp.concatenate([keys, keys])               # ... and their random streams
 
-        def member(params, z, k):
+        def member(obs_stats, params, z, k):
             k_a, k_e = jax.random.split(k)
-            p2, s2, train_ret = self.adapt(params, st.obs_stats, z, k_a)
+            p2, s2, train_ret = self.adapt(params, obs_stats, z, k_a)
             return self.evaluate(p2, s2, z, k_e), s2, train_ret
 
-        fit, stats, train_ret = jax.vmap(member)(pop, tasks, keys)
+        members = parallel.spread(jax.vmap(member, in_axes=(None, 0, 0, 0)), cfg.population, self.spreads, shared=1)
+        fit, stats, train_ret = members(st.obs_stats, pop, tasks, keys)
         # a diverged member (NaN return) ranks last instead of poisoning the gradient
         ok = jnp.isfinite(fit)
         safe = jnp.where(ok, fit, jnp.min(jnp.where(ok, fit, jnp.inf)) - 1.0)

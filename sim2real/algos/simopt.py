@@ -40,6 +40,7 @@ from sim2real.algos import reps
 from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
 from sim2real.algos.registry import register
 from sim2real.dists import gaussian
+from sim2real.envs import parallel
 from sim2real.envs.base import Env
 from sim2real.rl.episodes import closed_loop
 from sim2real.rl.ppo import PPO, PPOConfig, PPOState
@@ -301,18 +302,21 @@ class SimOpt(OuterLoop):
         cfg = self.cfg
         R = real.signals.shape[0]
 
-        def per_sample(x, k):
+        def per_sample(shared, x, k):
+            params, obs_stats, real = shared
             z = self.space.expand(x)
 
             def per_real(sig_r, mask_r, q0, v0, g, kk):
-                sig, _, _, _ = self.rollout(st.ppo.params, st.ppo.obs_stats, z, kk, q0, v0, g)
+                sig, _, _, _ = self.rollout(params, obs_stats, z, kk, q0, v0, g)
                 return discrepancy.discrepancy(sig, sig_r, self.weights, cfg.w_l1, cfg.w_l2, cfg.smooth_std,
                                                cfg.smooth_truncate, mask_r)
 
             return jnp.mean(jax.vmap(per_real)(real.signals, real.mask, real.qpos0, real.qvel0, real.goal,
                                                jax.random.split(k, R)))
 
-        return jax.vmap(per_sample)(xi, jax.random.split(key, xi.shape[0]))
+        n = xi.shape[0]  # the samples split over the host's devices with ppo.split_envs / data_parallel
+        costs = parallel.spread(jax.vmap(per_sample, in_axes=(None, 0, 0)), n, self.ppo.cfg.spreads, shared=1)
+        return costs((st.ppo.params, st.ppo.obs_stats, real), xi, jax.random.split(key, n))
 
     def reps_step(self, st: SimOptState, real: RealData):
         """One REPS update of ``N(mu, Sigma)`` against ``real``; returns ``(state, info)``."""

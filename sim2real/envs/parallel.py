@@ -60,7 +60,24 @@ def batch_devices(batch: int) -> list:
     n = len(devs)
     while batch % n:
         n -= 1
+    avoid_shardy_crash(devs[:n])
     return devs[:n]
+
+
+def avoid_shardy_crash(devices=None) -> bool:
+    """Lower with GSPMD instead of Shardy where a ``shard_map`` spans several GPUs.
+
+    Why: XLA in JAX 0.11.2 (CUDA) segfaults while compiling any ``jax.shard_map`` whose body runs an
+    MJX step over 2 GPUs when Shardy partitions it -- a contact-free pendulum's single step too --
+    and compiles and runs the same program with GSPMD (``benchmarks/xla_multigpu_repro.py``;
+    ``benchmarks/results/multi_gpu/README.md``). The setting is part of jit's cache key, so it is
+    made before anything is traced (PPO's constructor, ``batch_map``, the training driver call
+    this); CPU devices keep Shardy. Returns whether GSPMD is now in use.
+    """
+    devices = jax.devices() if devices is None else devices
+    if len(devices) > 1 and devices[0].platform == "gpu" and jax.config.jax_use_shardy_partitioner:
+        jax.config.update("jax_use_shardy_partitioner", False)
+    return not jax.config.jax_use_shardy_partitioner
 
 
 def split_keys(keys, n: int = 2):
@@ -116,6 +133,33 @@ def gather_whole(tree, batch: int):
     if mesh.size == 1:
         return tree
     return jax.lax.with_sharding_constraint(tree, NamedSharding(mesh, PartitionSpec()))
+
+
+def spread(fn: Callable, batch: int, on: bool = True, shared: int = 0) -> Callable:
+    """``fn`` over a leading batch axis (samples, population members, episodes), each device
+    running its slice (:func:`env_slices`) and the results gathered whole (:func:`gather_whole`),
+    callable inside ``jit``. ``fn`` itself when ``on`` is false or one device divides ``batch``.
+
+    The outer loops' independent work goes through this: SimOpt's REPS samples, the ES-MAML
+    population, the evaluation episodes of LSDR/ADR/DORAEMON and of the training driver's tests.
+    ``on`` is the PPO config's ``spreads`` (``split_envs`` or ``data_parallel``). The first
+    ``shared`` arguments are given whole to every device (policy parameters, recordings); the
+    rest are split along their leading axis. Pass what ``fn`` needs whole as such an argument,
+    not by closure: an array closed over keeps its placement over the devices inside the
+    per-device program, which JAX (0.10 and later) refuses at the first indexing.
+    """
+    if not on:
+        return fn
+    specs = (PartitionSpec(),) * shared + (ENVS,) * 64
+    mapped = None
+
+    def run(*args):
+        nonlocal mapped
+        if mapped is None:
+            mapped = env_slices(fn, batch, in_specs=specs[:len(args)])
+        return mapped(*args) if mapped is fn else gather_whole(mapped(*args), batch)
+
+    return run
 
 
 def batch_map(fn: Callable, batch: int) -> Callable:

@@ -11,6 +11,7 @@ import dataclasses
 import jax
 import jax.numpy as jnp
 
+from sim2real.envs import parallel
 from sim2real.envs.base import Env
 from sim2real.rl import networks, normalize
 from sim2real.rl.ppo import PPO
@@ -69,18 +70,19 @@ def episodes(env: Env, ppo: PPO, params, obs_stats, zs, key, num_episodes: int =
 
     Returns a dict of ``[N, E]`` jax arrays: ``return``, ``length``, and each env metric at the
     last step of the episode (``final_<metric>``). An episode stops at its first termination or
-    truncation. Pure: usable inside jit (LSDR evaluates its contexts this way).
+    truncation. Pure: usable inside jit (LSDR evaluates its contexts this way). With
+    ``ppo.cfg.spreads`` the ``N`` physics vectors are split over the host's devices.
     """
     n = zs.shape[0]
 
-    def one(z, k):
+    def one(policy, z, k):
         k_reset, k_run = jax.random.split(k)
-        s, ret, length, _ = closed_loop(env, ppo, params, obs_stats, env.reset(k_reset, z), z, k_run,
+        s, ret, length, _ = closed_loop(env, ppo, *policy, env.reset(k_reset, z), z, k_run,
                                         env.config.episode_length, deterministic)
         out = {"return": ret, "length": length}
         out.update({f"final_{m}": v for m, v in s.metrics.items()})
         return out
 
     keys = jax.random.split(key, n * num_episodes).reshape(n, num_episodes, -1)
-    run = jax.vmap(jax.vmap(one, in_axes=(None, 0)), in_axes=(0, 0))
-    return run(jnp.asarray(zs), keys)
+    run = jax.vmap(jax.vmap(one, in_axes=(None, None, 0)), in_axes=(None, 0, 0))
+    return parallel.spread(run, n, ppo.cfg.spreads, shared=1)((params, obs_stats), jnp.asarray(zs), keys)

@@ -36,7 +36,7 @@ def update(ppo: PPO, cfg: EPOptConfig, st: PPOState, sample: Callable):
     key, k_init, k_col, k_learn = jax.random.split(st.key, 4)
     runner = init_runner(env, k_init, cfg.num_contexts, sample, networks.carry_size(ppo.cfg.net))
     _, batch, _ = collect(env, ppo.net, st.params, st.obs_stats, ppo.ctx, runner, k_col, sample, T,
-                          split=ppo.cfg.split_envs)
+                          split=ppo.cfg.spreads)
     done = batch.terminated | batch.truncated                         # [T, N]
     # valid until (and including) the first episode end of each env
     ended_before = jnp.cumsum(done, axis=0) - done > 0

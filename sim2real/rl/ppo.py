@@ -15,6 +15,7 @@ import optax
 from flax import struct
 
 from sim2real.envs.base import Env
+from sim2real.envs import parallel
 from sim2real.rl import data_parallel
 from sim2real.rl import gae as gae_lib
 from sim2real.rl import networks, normalize
@@ -70,6 +71,12 @@ class PPOConfig:
     net: NetConfig = NetConfig()
     split_envs: bool = False
     data_parallel: bool = False
+
+    @property
+    def spreads(self) -> bool:
+        """Whether work is split over the host's devices (``split_envs`` or ``data_parallel``);
+        the outer loops then spread their samples, population and evaluation episodes too."""
+        return self.split_envs or self.data_parallel
 
     @property
     def batch_size(self) -> int:
@@ -133,6 +140,8 @@ class PPO:
         self.net, _ = networks.init_params(jax.random.PRNGKey(0), cfg.net, env.obs_size, len(self.ctx),
                                            env.action_size)
         check(cfg)
+        if cfg.spreads:  # before any trace: the partitioner is in jit's cache key
+            parallel.batch_devices(cfg.num_envs)
         if cfg.num_envs % cfg.num_minibatches and cfg.net.kind == "lstm":
             raise ValueError("num_envs must be divisible by num_minibatches for recurrent policies")
         if cfg.batch_size % cfg.num_minibatches:

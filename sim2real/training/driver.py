@@ -110,6 +110,35 @@ RESUMABLE_KEYS = ("total_steps", "max_chunks", "checkpoint_every", "keep_checkpo
                   "resume", "overwrite", "logger", "wandb_mode", "wandb_project")
 
 
+def resolve_devices(cfg: TrainConfig) -> TrainConfig:
+    """``devices=all|auto`` -> ``ppo.data_parallel`` (``TrainConfig.devices``). ``auto`` looks at
+    the devices JAX sees only when no split was asked for, so a CPU host can still be given one
+    device per core first."""
+    if cfg.devices == "one" or cfg.ppo.spreads:
+        return cfg
+    from sim2real.rl import data_parallel
+
+    on = dataclasses.replace(cfg, ppo=dataclasses.replace(cfg.ppo, data_parallel=True))
+    if cfg.devices == "all":
+        try:
+            data_parallel.check(on.ppo)
+        except ValueError as e:
+            raise config_lib.ConfigError(f"devices=all: {e}") from None
+        return on
+    devs = jax.devices()
+    if len(devs) < 2 or devs[0].platform != "gpu":
+        return cfg
+    try:
+        data_parallel.check(on.ppo)
+    except ValueError as e:
+        warnings.warn(f"devices=auto: {len(devs)} GPUs, but training on one ({e})")
+        return cfg
+    if cfg.ppo.num_envs % len(devs):
+        warnings.warn(f"devices=auto: ppo.num_envs={cfg.ppo.num_envs} is not divisible by the {len(devs)} GPUs; "
+                      f"splitting over those that divide it")
+    return on
+
+
 def validate(cfg: TrainConfig) -> None:
     """Refuse a config that cannot run, naming the key: before any folder is made or anything compiled."""
     if not cfg.name or os.sep in cfg.name or cfg.name in (".", ".."):
@@ -203,7 +232,9 @@ def train(cfg: TrainConfig, on_chunk=None) -> dict:
     validate(cfg)
     if cfg.resume:
         cfg = resume_config(cfg)
-    if cfg.ppo.split_envs or cfg.ppo.data_parallel:  # (on a GPU host the CPU device count changes nothing)
+    else:  # (a resumed run keeps the split its config.yaml holds)
+        cfg = resolve_devices(cfg)
+    if cfg.ppo.spreads:  # (on a GPU host the CPU device count changes nothing)
         _use_cpu_cores()
     env = make(cfg.env, **cfg.env_options)
     if not cfg.resume:  # (a resumed run's config.yaml holds the resolved box already)

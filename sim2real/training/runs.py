@@ -86,6 +86,13 @@ class TrainConfig:
         later), ``online`` or ``disabled``.
       wandb_project: the W&B project.
       progress: draw a progress bar.
+      devices: ``auto`` (default): on a host with several GPUs, a new run splits its envs, PPO
+        update and outer-loop samples over all of them (``ppo.data_parallel=true``, written into
+        the run's ``config.yaml``) where the PPO settings allow it (an MLP policy,
+        ``ppo.num_steps`` divisible by ``ppo.num_minibatches``, ``ppo.num_envs`` by the GPU
+        count); one device otherwise. ``all``: the same on any host (every CPU core as a device
+        on a CPU host), refused where the settings do not allow it. ``one``: as
+        ``ppo.split_envs`` / ``ppo.data_parallel`` say.
       ppo: PPO settings.
       dr: domain-randomisation box.
       test: physics the policy is evaluated on while it trains (``TestConfig``; off by default).
@@ -111,6 +118,7 @@ class TrainConfig:
     wandb_mode: Literal["offline", "online", "disabled"] = "offline"
     wandb_project: str = "sim2real"
     progress: bool = True
+    devices: Literal["auto", "all", "one"] = "auto"
     ppo: PPOConfig = PPOConfig()
     dr: DRConfig = DRConfig()
     test: TestConfig = TestConfig()
