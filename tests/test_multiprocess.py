@@ -1,13 +1,18 @@
 """Several processes (jax.distributed, one per host or per GPU) run data-parallel PPO as one
-process with all the devices would: checked with 2 processes of one CPU device each.
+process with all the devices would: checked with 2 processes of one CPU device each, through the
+training driver (``processes=2``) and through the Python API (``data_parallel.globalize``).
 
 Subprocesses: the device count and the distributed runtime are fixed when JAX starts.
 """
+import csv
+import os
+import socket
 import subprocess
 import sys
 import textwrap
 
 import numpy as np
+import pytest
 
 MULTI_PROCESS = textwrap.dedent("""
     import sys, jax, numpy as np
@@ -39,14 +44,75 @@ MULTI_PROCESS = textwrap.dedent("""
 """)
 
 
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("localhost", 0))
+        return s.getsockname()[1]
+
+
+DRIVER = textwrap.dedent("""
+    import sys, jax, numpy as np
+    mode, out, npy = sys.argv[1], sys.argv[2], sys.argv[3]
+    from sim2real.common import config as config_lib
+    from sim2real.rl.data_parallel import host_value
+    from sim2real.training.driver import TrainConfig, train
+    args = ["env=pendulum", "algo=udr", "dr.params=[mass:pole]", "dr.low=[0.7]", "dr.high=[1.3]", "ppo.num_envs=8",
+            "ppo.num_steps=16", "ppo.num_minibatches=4", "ppo.net.hidden=[16]", "num_seeds=2", "total_steps=512",
+            "updates_per_chunk=2", "progress=false", "tensorboard=false", f"out_dir={out}", "name=r",
+            "test.every=1", "test.params=[mass:pole]", "test.points=[[0.8],[1.2]]"]
+    if mode == "process":  # one of 2 processes, one CPU device each, as on 2 hosts
+        args += ["processes=2", f"process_id={sys.argv[4]}", f"coordinator=localhost:{sys.argv[5]}"]
+    else:                  # one process with 2 CPU devices
+        from sim2real.envs import parallel
+        assert parallel.use_cpu_cores(2) == 2
+        args += ["devices=all"]
+    res = train(config_lib.load(TrainConfig, args))
+    assert len(jax.devices()) == 2 and res["state"].runner.z.sharding.device_set == set(jax.devices())
+    leaves = jax.tree_util.tree_leaves((res["state"].params, res["state"].obs_stats))
+    np.save(npy, np.concatenate([np.ravel(host_value(x)) for x in leaves]))
+""")
+
+
+def test_the_training_driver_in_two_processes_trains_as_one_process_with_two_devices(tmp_path):
+    """``scripts/train.py ... processes=2 process_id=K coordinator=host:port`` on 2 processes of
+    one CPU device each: both end with the parameters of one process with 2 devices; process 0
+    alone writes the run folder (config, metrics, tests, policy), both write the checkpoints."""
+    port = _free_port()
+    run = lambda *a: subprocess.Popen([sys.executable, "-c", DRIVER, *map(str, a)],  # noqa: E731
+                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    procs = [run("process", tmp_path / "multi", tmp_path / f"p{k}.npy", k, port) for k in (0, 1)]
+    for p in procs:
+        _, err = p.communicate(timeout=600)
+        assert p.returncode == 0, err[-3000:]
+    one = run("one", tmp_path / "one", tmp_path / "one.npy")
+    _, err = one.communicate(timeout=600)
+    assert one.returncode == 0, err[-3000:]
+    ref = np.load(tmp_path / "one.npy")
+    for k in (0, 1):
+        np.testing.assert_allclose(np.load(tmp_path / f"p{k}.npy"), ref, rtol=1e-6, atol=1e-7)
+    multi, single = tmp_path / "multi" / "r", tmp_path / "one" / "r"
+    assert sorted(os.listdir(multi)) == sorted(os.listdir(single))
+    assert sorted(os.listdir(multi / "checkpoints")) == ["1", "2"]
+    rows = lambda d, f: [{k: v for k, v in r.items() if k != "wall_seconds"} for r in csv.DictReader(open(d / f))]  # noqa: E731
+    assert rows(multi, "metrics.csv") == rows(single, "metrics.csv")
+    assert rows(multi, "test.csv") == rows(single, "test.csv")
+
+
+def test_processes_need_a_coordinator_and_an_index_in_range():
+    from sim2real.common import config as config_lib
+    from sim2real.training.driver import TrainConfig, validate
+
+    for bad, match in ((["processes=2"], "coordinator"), (["processes=2", "process_id=2", "coordinator=h:1"], "process_id"),
+                       (["processes=0"], "processes")):
+        with pytest.raises(config_lib.ConfigError, match=match):
+            validate(config_lib.load(TrainConfig, bad))
+
+
+@pytest.mark.slow  # the driver test above checks the same through the training driver
 def test_two_processes_compute_the_update_of_one_process_with_two_devices(tmp_path):
     """jax.distributed with 2 processes of one CPU device each (gloo collectives), the same
     program: both end with the parameters one process with 2 devices computes."""
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("localhost", 0))
-        port = s.getsockname()[1]
+    port = _free_port()
     run = lambda *a: subprocess.Popen([sys.executable, "-c", MULTI_PROCESS, *map(str, a)],  # noqa: E731
                                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     procs = [run("process", tmp_path / f"p{k}.npy", k, port) for k in (0, 1)]

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optax
 from jax.sharding import PartitionSpec
 
@@ -145,6 +146,16 @@ def globalize(ppo, st):
     runner = jax.tree_util.tree_map(lambda x: put(x, split), st.runner)
     rest = jax.tree_util.tree_map(lambda x: put(x, whole), st.replace(runner=None))
     return rest.replace(runner=runner)
+
+
+def host_value(x):
+    """``x`` as a numpy array in this process, whatever its placement: a global array of several
+    processes (``jax.distributed``) is gathered from all of them first."""
+    if isinstance(x, jax.Array) and not x.is_fully_addressable:
+        from jax.experimental import multihost_utils
+
+        return np.asarray(multihost_utils.process_allgather(x, tiled=True))
+    return np.asarray(x)
 
 
 def local_value(x):

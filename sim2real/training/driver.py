@@ -17,6 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from sim2real.rl.data_parallel import host_value
 from sim2real.training import checkpoint
 from sim2real.envs import parallel
 from sim2real.common import config as config_lib
@@ -107,13 +108,44 @@ def _use_cpu_cores():
 # Keys that may differ between a run's saved config and the one it is resumed with: they change
 # how long it runs and what it reports, not what it computes.
 RESUMABLE_KEYS = ("total_steps", "max_chunks", "checkpoint_every", "keep_checkpoints", "tensorboard", "progress",
-                  "resume", "overwrite", "logger", "wandb_mode", "wandb_project")
+                  "resume", "overwrite", "logger", "wandb_mode", "wandb_project", "processes", "process_id",
+                  "coordinator")
+
+
+class _Silent:
+    """What a process other than 0 has instead of the run folder's writers."""
+
+    def __getattr__(self, name):
+        return lambda *a, **k: None
+
+
+class _Fixed:
+    """An algorithm stand-in whose ``policy`` is already fetched to this process."""
+
+    def __init__(self, policy):
+        self._policy = policy
+
+    def policy(self, state):
+        return self._policy
+
+
+def _join_processes(cfg: TrainConfig) -> None:
+    """``jax.distributed`` for ``processes > 1``: every process, before JAX computes anything."""
+    # CPU devices of several processes talk through gloo (GPUs through NCCL; this changes nothing there)
+    jax.config.update("jax_cpu_collectives_implementation", "gloo")
+    jax.distributed.initialize(coordinator_address=cfg.coordinator, num_processes=cfg.processes,
+                               process_id=cfg.process_id)
 
 
 def resolve_devices(cfg: TrainConfig) -> TrainConfig:
     """``devices=all|auto`` -> ``ppo.data_parallel`` (``TrainConfig.devices``). ``auto`` looks at
     the devices JAX sees only when no split was asked for, so a CPU host can still be given one
     device per core first."""
+    if cfg.processes > 1:  # the split over processes is data-parallel PPO's
+        if cfg.ppo.split_envs:
+            raise config_lib.ConfigError(f"processes={cfg.processes}: needs ppo.data_parallel (the envs split over "
+                                         "every process's devices), not ppo.split_envs (one host's rollouts)")
+        cfg = dataclasses.replace(cfg, devices="all")
     if cfg.devices == "one" or cfg.ppo.spreads:
         return cfg
     from sim2real.rl import data_parallel
@@ -154,6 +186,11 @@ def validate(cfg: TrainConfig) -> None:
         except ImportError:
             raise config_lib.ConfigError("logger=wandb needs the wandb package (pip install wandb); "
                                          "sim2real does not install it") from None
+    if cfg.processes < 1 or not 0 <= cfg.process_id < cfg.processes:
+        raise config_lib.ConfigError(f"processes={cfg.processes}, process_id={cfg.process_id}: need processes >= 1 "
+                                     "and 0 <= process_id < processes")
+    if cfg.processes > 1 and not cfg.coordinator:
+        raise config_lib.ConfigError(f"processes={cfg.processes}: coordinator=host:port of process 0 is needed")
     if cfg.resume and cfg.overwrite:
         raise config_lib.ConfigError("resume=true and overwrite=true contradict each other; choose one")
     from sim2real.rl.ppo import check
@@ -230,12 +267,15 @@ def train(cfg: TrainConfig, on_chunk=None) -> dict:
     from sim2real.common.cli import Stopped, stop_on_signal
 
     validate(cfg)
+    if cfg.processes > 1:  # before JAX computes anything
+        _join_processes(cfg)
     if cfg.resume:
         cfg = resume_config(cfg)
     else:  # (a resumed run keeps the split its config.yaml holds)
         cfg = resolve_devices(cfg)
-    if cfg.ppo.spreads:  # (on a GPU host the CPU device count changes nothing)
+    if cfg.ppo.spreads and cfg.processes == 1:  # (on a GPU host the CPU device count changes nothing)
         _use_cpu_cores()
+    primary = jax.process_index() == 0  # the one process that writes the run folder
     env = make(cfg.env, **cfg.env_options)
     if not cfg.resume:  # (a resumed run's config.yaml holds the resolved box already)
         from sim2real.algos import from_diagnosis
@@ -243,7 +283,8 @@ def train(cfg: TrainConfig, on_chunk=None) -> dict:
         cfg = dataclasses.replace(cfg, dr=from_diagnosis.resolve(cfg.dr, env))
     algo = build_algo(_without_warm_start(cfg) if cfg.resume else cfg, env)  # resume: the checkpoint is the start
     run = Run(cfg)
-    run.check()
+    if primary:
+        run.check()
     seeds = jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.num_seeds)
     # created under jit, so the state's arrays have exactly the layout chunk outputs have
     # (an eagerly built state costs a second compilation of the chunk on CPU)
@@ -270,17 +311,23 @@ def train(cfg: TrainConfig, on_chunk=None) -> dict:
     else:
         state = init(seeds)
         n_chunks = num_chunks(cfg, algo)
-    run.prepare()  # the first write: config validated, algorithm built, checkpoint read
+    if primary:
+        run.prepare()  # the first write: config validated, algorithm built, checkpoint read
+    if cfg.processes > 1:  # the others wait for the folder (an overwrite deletes it first)
+        from jax.experimental import multihost_utils
+
+        multihost_utils.sync_global_devices("sim2real: run folder ready")
     mngr = checkpoint.manager(run.ckpt_dir, cfg.keep_checkpoints)
-    logger = MetricsLogger(run, cfg, resume_from_update=start * cfg.updates_per_chunk, steps_per_update=per_update)
-    tests = TestLog(run, cfg, test_zs, start) if tester else None
+    logger = (MetricsLogger(run, cfg, resume_from_update=start * cfg.updates_per_chunk, steps_per_update=per_update)
+              if primary else _Silent())
+    tests = (TestLog(run, cfg, test_zs, start) if primary else _Silent()) if tester else None
 
     def test(chunks_done):
-        tests.write(chunks_done, chunks_done * cfg.updates_per_chunk * per_update, np.asarray(tester(state)))
+        tests.write(chunks_done, chunks_done * cfg.updates_per_chunk * per_update, host_value(tester(state)))
 
     end = n_chunks if not cfg.max_chunks else min(n_chunks, start + cfg.max_chunks)
-    bar = Progress(cfg, total=n_chunks * cfg.updates_per_chunk * per_update,
-                   done=start * cfg.updates_per_chunk * per_update)
+    bar = Progress(dataclasses.replace(cfg, progress=cfg.progress and primary),
+                   total=n_chunks * cfg.updates_per_chunk * per_update, done=start * cfg.updates_per_chunk * per_update)
     last = None
     try:
         with stop_on_signal() as stop:
@@ -289,7 +336,7 @@ def train(cfg: TrainConfig, on_chunk=None) -> dict:
                     test(c)
                 t0 = time.perf_counter()
                 state, metrics = chunk(state, c * cfg.updates_per_chunk)
-                metrics = jax.tree_util.tree_map(np.asarray, metrics)  # [S, K] per metric
+                metrics = jax.tree_util.tree_map(host_value, metrics)  # [S, K] per metric
                 dt = time.perf_counter() - t0
                 logger.write(c, metrics, dt)
                 if on_chunk is not None:
@@ -309,5 +356,7 @@ def train(cfg: TrainConfig, on_chunk=None) -> dict:
         mngr.wait_until_finished()
         bar.close()
         logger.close()
-    export_policy(algo, state, os.path.join(run.dir, "policy.msgpack"))
+    policy = jax.tree_util.tree_map(host_value, algo.policy(state))  # (every process takes part in a gather)
+    if primary:
+        export_policy(_Fixed(policy), state, os.path.join(run.dir, "policy.msgpack"))
     return {"state": state, "metrics": last, "run_dir": run.dir, "algo": algo, "env": env, "finished": end == n_chunks}

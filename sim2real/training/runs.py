@@ -93,6 +93,12 @@ class TrainConfig:
         count); one device otherwise. ``all``: the same on any host (every CPU core as a device
         on a CPU host), refused where the settings do not allow it. ``one``: as
         ``ppo.split_envs`` / ``ppo.data_parallel`` say.
+      processes: several processes train one run together (``jax.distributed``; one per host or
+        per GPU): how many. Every process runs the same command but for ``process_id``; the envs
+        are split over all their devices (``ppo.data_parallel``); process 0 writes the run folder,
+        all take part in the checkpoints (one filesystem, shared by the hosts).
+      process_id: this process's index, ``0 .. processes - 1``.
+      coordinator: ``host:port`` where process 0 listens (``processes > 1``).
       ppo: PPO settings.
       dr: domain-randomisation box.
       test: physics the policy is evaluated on while it trains (``TestConfig``; off by default).
@@ -119,6 +125,9 @@ class TrainConfig:
     wandb_project: str = "sim2real"
     progress: bool = True
     devices: Literal["auto", "all", "one"] = "auto"
+    processes: int = 1
+    process_id: int = 0
+    coordinator: str = ""
     ppo: PPOConfig = PPOConfig()
     dr: DRConfig = DRConfig()
     test: TestConfig = TestConfig()
@@ -419,7 +428,9 @@ def export_policy(algo, state, path: str) -> None:
     """
     from flax import serialization
 
-    params, stats = algo.policy(state)
+    from sim2real.rl.data_parallel import host_value
+
+    params, stats = jax.tree_util.tree_map(host_value, algo.policy(state))
     tmp = path + ".tmp"
     with open(tmp, "wb") as f:
         f.write(serialization.to_bytes({"params": params, "obs_stats": stats}))
