@@ -119,16 +119,6 @@ class _Silent:
         return lambda *a, **k: None
 
 
-class _Fixed:
-    """An algorithm stand-in whose ``policy`` is already fetched to this process."""
-
-    def __init__(self, policy):
-        self._policy = policy
-
-    def policy(self, state):
-        return self._policy
-
-
 def _join_processes(cfg: TrainConfig) -> None:
     """``jax.distributed`` for ``processes > 1``: every process, before JAX computes anything."""
     # CPU devices of several processes talk through gloo (GPUs through NCCL; this changes nothing there)
@@ -356,7 +346,5 @@ def train(cfg: TrainConfig, on_chunk=None) -> dict:
         mngr.wait_until_finished()
         bar.close()
         logger.close()
-    policy = jax.tree_util.tree_map(host_value, algo.policy(state))  # (every process takes part in a gather)
-    if primary:
-        export_policy(_Fixed(policy), state, os.path.join(run.dir, "policy.msgpack"))
+    export_policy(algo, state, os.path.join(run.dir, "policy.msgpack"), write=primary)
     return {"state": state, "metrics": last, "run_dir": run.dir, "algo": algo, "env": env, "finished": end == n_chunks}

@@ -420,17 +420,21 @@ class Progress:
             self.p.stop()
 
 
-def export_policy(algo, state, path: str) -> None:
+def export_policy(algo, state, path: str, write: bool = True) -> None:
     """Write the policies of all seeds (params + observation statistics) as one msgpack file.
 
     Small (no env state), so it travels where checkpoints are too big: evaluate it with
-    ``load_policy`` on another machine, e.g. in native MuJoCo.
+    ``load_policy`` on another machine, e.g. in native MuJoCo. Of several processes
+    (``jax.distributed``) every one calls this (the policy is gathered from all of them) and the
+    one with ``write`` writes.
     """
     from flax import serialization
 
     from sim2real.rl.data_parallel import host_value
 
     params, stats = jax.tree_util.tree_map(host_value, algo.policy(state))
+    if not write:
+        return
     tmp = path + ".tmp"
     with open(tmp, "wb") as f:
         f.write(serialization.to_bytes({"params": params, "obs_stats": stats}))
