@@ -97,7 +97,7 @@ class TrainConfig:
         per GPU): how many. Every process runs the same command but for ``process_id``; the envs
         are split over all their devices (``ppo.data_parallel``); process 0 writes the run folder,
         all take part in the checkpoints (one filesystem, shared by the hosts).
-      process_id: this process's index, ``0 .. processes - 1``.
+      process_id: this process's index, from 0 to ``processes - 1``.
       coordinator: ``host:port`` where process 0 listens (``processes > 1``).
       ppo: PPO settings.
       dr: domain-randomisation box.
