@@ -40,7 +40,7 @@ MULTI_PROCESS = textwrap.dedent("""
     for _ in range(2):
         st, m = update(st)
     leaves = jax.tree_util.tree_leaves((st.params, st.obs_stats))
-    np.save(out, np.concatenate([np.ravel(data_parallel.local_value(x)) for x in leaves]))
+    np.save(out, np.concatenate([np.ravel(data_parallel.host_value(x)) for x in leaves]))
 """)
 
 

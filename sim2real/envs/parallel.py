@@ -150,13 +150,9 @@ def spread(fn: Callable, batch: int, on: bool = True, shared: int = 0) -> Callab
     """
     if not on:
         return fn
-    specs = (PartitionSpec(),) * shared + (ENVS,) * 64
-    mapped = None
 
     def run(*args):
-        nonlocal mapped
-        if mapped is None:
-            mapped = env_slices(fn, batch, in_specs=specs[:len(args)])
+        mapped = env_slices(fn, batch, in_specs=(PartitionSpec(),) * shared + (ENVS,) * (len(args) - shared))
         return mapped(*args) if mapped is fn else gather_whole(mapped(*args), batch)
 
     return run

@@ -156,8 +156,3 @@ def host_value(x):
 
         return np.asarray(multihost_utils.process_allgather(x, tiled=True))
     return np.asarray(x)
-
-
-def local_value(x):
-    """A replicated array's value in this process (every process holds a full copy)."""
-    return jax.device_get(x.addressable_data(0)) if hasattr(x, "addressable_data") else jax.device_get(x)

@@ -141,21 +141,18 @@ def resolve_devices(cfg: TrainConfig) -> TrainConfig:
     from sim2real.rl import data_parallel
 
     on = dataclasses.replace(cfg, ppo=dataclasses.replace(cfg.ppo, data_parallel=True))
-    if cfg.devices == "all":
-        try:
-            data_parallel.check(on.ppo)
-        except ValueError as e:
-            raise config_lib.ConfigError(f"devices=all: {e}") from None
-        return on
-    devs = jax.devices()
-    if len(devs) < 2 or devs[0].platform != "gpu":
-        return cfg
+    if cfg.devices == "auto":
+        devs = jax.devices()
+        if len(devs) < 2 or devs[0].platform != "gpu":
+            return cfg
     try:
         data_parallel.check(on.ppo)
     except ValueError as e:
+        if cfg.devices == "all":
+            raise config_lib.ConfigError(f"devices=all: {e}") from None
         warnings.warn(f"devices=auto: {len(devs)} GPUs, but training on one ({e})")
         return cfg
-    if cfg.ppo.num_envs % len(devs):
+    if cfg.devices == "auto" and cfg.ppo.num_envs % len(devs):
         warnings.warn(f"devices=auto: ppo.num_envs={cfg.ppo.num_envs} is not divisible by the {len(devs)} GPUs; "
                       f"splitting over those that divide it")
     return on
