@@ -2,15 +2,18 @@
 hopper, a SimOpt REPS update at the paper's 9,600 x 453, and ES-MAML meta-iterations.
 
     python benchmarks/multi_gpu.py gpus=1,2 tag=h100x2           # on a host with 2 GPUs
-    python benchmarks/multi_gpu.py stages=ppo gpus=1,2 ppo_steps=30e6
+    python benchmarks/multi_gpu.py stages=ppo,ppo_total gpus=1,2 ppo_envs=16384 ppo_steps=30e6
 
 Every (stage, GPU count) runs in its own process with ``CUDA_VISIBLE_DEVICES`` set to the first
 ``n`` GPUs, so the 1-GPU figure is a plain one-GPU program on the same host. Both counts run the
 same algorithm: PPO with ``devices=all`` (``ppo.data_parallel=true``; on one GPU a mesh of one),
 SimOpt and ES-MAML with their samples / population split over the devices (``parallel.spread``).
-Per GPU: ``env_batch`` envs stepping; ``ppo_envs`` PPO envs with ``16`` minibatches each (so a
-minibatch has the same size and an env step buys the same number of gradient steps at any count);
-REPS ``9600`` samples and the ES-MAML ``population`` in total (strong scaling: the paper's sizes).
+Per GPU: ``env_batch`` envs stepping; ``ppo_envs`` PPO envs with ``ppo_minibatches`` minibatches
+each (at 16, a minibatch has the same size and an env step buys the same number of gradient steps at
+any count); REPS ``9600`` samples and the ES-MAML ``population`` in total (strong scaling: the
+paper's sizes). Stage ``ppo_total`` runs, on each count below the largest, the largest count's PPO
+configuration (all its envs and minibatches): the same algorithm as that count's ``ppo`` row, so
+their returns should agree (data-parallel PPO is the one-device update to float rounding).
 A stage that crashes is recorded with its exit code (a segmentation fault is -11), not retried.
 
 Writes ``<out>/<tag>.csv`` (one row per stage and count, the device named) and
@@ -45,18 +48,27 @@ def _sibling(name: str):
 @dataclasses.dataclass
 class Settings:
     """stages: comma-separated of env, ppo, reps, esmaml; gpus: GPU counts; env_batch, env_steps:
-    envs per GPU and scan length of the stepping benchmark; ppo_envs: PPO envs per GPU; ppo_steps:
-    env steps per seed; seeds: PPO seeds (vmapped); eval_episodes: final deterministic episodes per
+    envs per GPU and scan length of the stepping benchmark; ppo_envs: PPO envs per GPU;
+    ppo_minibatches: PPO minibatches per GPU; ppo_minibatches_total: above 0, that many minibatches at
+    every count instead (each GPU's share of a minibatch then holds as many samples as on one GPU: the
+    same work per GPU, fewer gradient steps per env step); ppo_num_steps: rollout length per env and
+    update (with twice the envs and half the rollout, an update has the same samples); ppo_chunk: updates per timed chunk; ppo_steps: env steps
+    per seed; seeds: PPO seeds (vmapped); seed: their base seed; eval_episodes: final deterministic episodes per
     seed; reps_samples, reps_horizon; population: ES-MAML population (total); es_scale: below 1,
     es_maml_hopper's small inner loop (a CPU check of the script); repeats: timed calls;
     timeout: seconds per stage process; tag; out. stage, n: internal (one stage in this process)."""
-    stages: str = "env,ppo,reps,esmaml"
+    stages: str = "env,ppo,ppo_total,reps,esmaml"
     gpus: str = "1,2"
     env_batch: int = 131072
     env_steps: int = 100
     ppo_envs: int = 8192
+    ppo_minibatches: int = 16
+    ppo_minibatches_total: int = 0
+    ppo_num_steps: int = 32
+    ppo_chunk: int = 5
     ppo_steps: float = 40e6
     seeds: int = 3
+    seed: int = 0
     eval_episodes: int = 64
     reps_samples: int = 9600
     reps_horizon: int = 453
@@ -91,7 +103,8 @@ def stage_env(a: Settings) -> dict:
     return {"batch": b, "env_steps_per_s": _sibling("throughput").bench_sim2real(b, a.env_steps, split=a.n > 1)}
 
 
-def stage_ppo(a: Settings) -> dict:
+def stage_ppo(a: Settings, per_gpu: int | None = None) -> dict:
+    """PPO on hopper with ``per_gpu`` GPUs' worth of envs and minibatches (default: this process's)."""
     import jax
     import numpy as np
 
@@ -99,11 +112,13 @@ def stage_ppo(a: Settings) -> dict:
     from sim2real.rl.episodes import episodes
     from sim2real.training.driver import TrainConfig, train
 
+    k = per_gpu or a.n
     cfg = config_lib.load(TrainConfig, [
-        f"config={os.path.join(HERE, '..', 'configs', 'hopper.yaml')}", f"ppo.num_envs={a.ppo_envs * a.n}",
-        f"ppo.num_minibatches={16 * a.n}", "devices=all", f"total_steps={int(a.ppo_steps)}",
-        f"num_seeds={a.seeds}", f"name=gpus{a.n}", "out_dir=/tmp/multi_gpu_runs", "overwrite=true",
-        "progress=false", "tensorboard=false"])
+        f"config={os.path.join(HERE, '..', 'configs', 'hopper.yaml')}", f"ppo.num_envs={a.ppo_envs * k}",
+        f"ppo.num_minibatches={a.ppo_minibatches_total or a.ppo_minibatches * k}",
+        f"ppo.num_steps={a.ppo_num_steps}", "devices=all", f"total_steps={int(a.ppo_steps)}",
+        f"updates_per_chunk={a.ppo_chunk}", "checkpoint_every=1000", f"num_seeds={a.seeds}", f"seed={a.seed}",
+        f"name=gpus{a.n}", "out_dir=/tmp/multi_gpu_runs", "overwrite=true", "progress=false", "tensorboard=false"])
     stamps = []
     out = train(cfg, on_chunk=lambda c, m: stamps.append(time.perf_counter()))
     rows = list(csv.DictReader(open(os.path.join(out["run_dir"], "metrics.csv"))))
@@ -153,7 +168,12 @@ def stage_esmaml(a: Settings) -> dict:
             "env_steps_per_s": es.env_steps_per_update() / sec, "compile_s": compile_s}
 
 
-STAGES = {"env": stage_env, "ppo": stage_ppo, "reps": stage_reps, "esmaml": stage_esmaml}
+def stage_ppo_total(a: Settings) -> dict:
+    return stage_ppo(a, per_gpu=max(int(g) for g in a.gpus.split(",")))
+
+
+STAGES = {"env": stage_env, "ppo": stage_ppo, "ppo_total": stage_ppo_total, "reps": stage_reps,
+          "esmaml": stage_esmaml}
 
 
 def run_one(a: Settings) -> None:
@@ -173,7 +193,10 @@ def main(a: Settings):
     for stage in a.stages.split(","):
         if stage not in STAGES:
             raise SystemExit(f"stages: unknown stage {stage!r} (choose from {', '.join(STAGES)})")
-        for n in (int(g) for g in a.gpus.split(",")):
+        counts = [int(g) for g in a.gpus.split(",")]
+        for n in counts:
+            if stage == "ppo_total" and n == max(counts):
+                continue  # that count's own ppo row is this configuration
             env = dict(os.environ, CUDA_VISIBLE_DEVICES=",".join(map(str, range(n))), PYTHONUNBUFFERED="1")
             args = [sys.executable, __file__, *sys.argv[1:], f"stage={stage}", f"n={n}"]
             t0 = time.time()
@@ -197,7 +220,7 @@ def write(rows, a: Settings):
             "chunks_timed", "wall_s", "jax", "error"]
     base = {r["stage"]: r.get("env_steps_per_s") for r in rows if r.get("gpus") == 1 and r.get("rc") == 0}
     for r in rows:
-        if r.get("env_steps_per_s") and base.get(r["stage"]):
+        if r.get("env_steps_per_s") and base.get(r["stage"]) and r["stage"] != "ppo_total":
             r["speedup"] = r["env_steps_per_s"] / base[r["stage"]]
     path = os.path.join(a.out, f"{a.tag}.csv")
     with open(path, "w", newline="") as f:
@@ -206,7 +229,7 @@ def write(rows, a: Settings):
         for r in rows:
             w.writerow({c: (f"{r[c]:.4g}" if isinstance(r.get(c), float) else r.get(c, "")) for c in cols})
     print(f"wrote {path}")
-    curves = [r for r in rows if r["stage"] == "ppo" and r.get("curve")]
+    curves = [r for r in rows if r["stage"] in ("ppo", "ppo_total") and r.get("curve")]
     if curves:
         import matplotlib
 
@@ -214,20 +237,23 @@ def write(rows, a: Settings):
         import matplotlib.pyplot as plt
 
         fig, ax = plt.subplots(figsize=(6, 4))
-        for r, color in zip(curves, ("C0", "C1", "C2", "C3")):
+        for r, color in zip(curves, ("C0", "C1", "C2", "C3", "C4")):
             for s in sorted({c[0] for c in r["curve"]}):
                 pts = sorted((x, y) for seed, x, y in r["curve"] if seed == s)
                 ax.plot(*zip(*pts), color=color, alpha=0.8,
-                        label=f"{r['gpus']} GPU{'s' if r['gpus'] > 1 else ''} ({r['num_envs']} envs)" if s == 0 else None)
+                        label=f"{r['gpus']} GPU{'s' if r['gpus'] > 1 else ''}: {r['num_envs']} envs, "
+                              f"{r['num_minibatches']} minibatches" if s == 0 else None,
+                        linestyle="--" if r["stage"] == "ppo_total" else "-")
         ax.set_xlabel("env steps per seed")
         ax.set_ylabel("training episode return")
-        ax.set_title(f"PPO hopper, same envs per GPU ({curves[0].get('device', '')})", fontsize=9)
+        ax.set_title(f"PPO hopper, solid: same envs per GPU; dashed: one GPU with the largest\n"
+                     f"count's whole batch ({curves[0].get('device', '')})", fontsize=9)
         ax.grid(alpha=0.3)
         ax.legend()
         fig.tight_layout()
         fig.savefig(os.path.join(a.out, f"{a.tag}_ppo.png"), dpi=120)
         with open(os.path.join(a.out, f"{a.tag}_ppo_curves.json"), "w") as f:
-            json.dump({str(r["gpus"]): r["curve"] for r in curves}, f)
+            json.dump({f"{r['stage']}_{r['gpus']}": r["curve"] for r in curves}, f)
 
 
 if __name__ == "__main__":
