@@ -52,41 +52,51 @@ def _free_port() -> int:
 
 DRIVER = textwrap.dedent("""
     import sys, jax, numpy as np
-    mode, out, npy = sys.argv[1], sys.argv[2], sys.argv[3]
+    mode, phase, out, npy = sys.argv[1:5]
     from sim2real.common import config as config_lib
     from sim2real.rl.data_parallel import host_value
-    from sim2real.training.driver import TrainConfig, train
+    from sim2real.training.driver import config_from_args, train
     args = ["env=pendulum", "algo=udr", "dr.params=[mass:pole]", "dr.low=[0.7]", "dr.high=[1.3]", "ppo.num_envs=8",
             "ppo.num_steps=16", "ppo.num_minibatches=4", "ppo.net.hidden=[16]", "num_seeds=2", "total_steps=512",
             "updates_per_chunk=2", "progress=false", "tensorboard=false", f"out_dir={out}", "name=r",
             "test.every=1", "test.params=[mass:pole]", "test.points=[[0.8],[1.2]]"]
+    if phase == "first":     # stop after the first of the run's 2 chunks
+        args += ["max_chunks=1"]
+    elif phase == "resume":  # continue from its checkpoint with the saved config
+        args = ["resume=true", f"out_dir={out}", "name=r", "progress=false"]
     if mode == "process":  # one of 2 processes, one CPU device each, as on 2 hosts
-        args += ["processes=2", f"process_id={sys.argv[4]}", f"coordinator=localhost:{sys.argv[5]}"]
+        args += ["processes=2", f"process_id={sys.argv[5]}", f"coordinator=localhost:{sys.argv[6]}"]
     else:                  # one process with 2 CPU devices
         from sim2real.envs import parallel
         assert parallel.use_cpu_cores(2) == 2
         args += ["devices=all"]
-    res = train(config_lib.load(TrainConfig, args))
+    res = train(config_from_args(args))
     assert len(jax.devices()) == 2 and res["state"].runner.z.sharding.device_set == set(jax.devices())
     leaves = jax.tree_util.tree_leaves((res["state"].params, res["state"].obs_stats))
     np.save(npy, np.concatenate([np.ravel(host_value(x)) for x in leaves]))
 """)
 
 
-def test_the_training_driver_in_two_processes_trains_as_one_process_with_two_devices(tmp_path):
+def test_the_training_driver_in_two_processes_trains_and_resumes_as_one_process_with_two_devices(tmp_path):
     """``scripts/train.py ... processes=2 process_id=K coordinator=host:port`` on 2 processes of
-    one CPU device each: both end with the parameters of one process with 2 devices; process 0
-    alone writes the run folder (config, metrics, tests, policy), both write the checkpoints."""
-    port = _free_port()
+    one CPU device each, stopped after one chunk and resumed (``resume=true``, the same processes
+    option): both end with the parameters of one process with 2 devices run without a stop;
+    process 0 alone writes the run folder (config, metrics, tests, policy), both write the
+    checkpoints."""
     run = lambda *a: subprocess.Popen([sys.executable, "-c", DRIVER, *map(str, a)],  # noqa: E731
                                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    procs = [run("process", tmp_path / "multi", tmp_path / f"p{k}.npy", k, port) for k in (0, 1)]
-    for p in procs:
-        _, err = p.communicate(timeout=600)
-        assert p.returncode == 0, err[-3000:]
-    one = run("one", tmp_path / "one", tmp_path / "one.npy")
-    _, err = one.communicate(timeout=600)
-    assert one.returncode == 0, err[-3000:]
+
+    def wait(procs):
+        for p in procs:
+            _, err = p.communicate(timeout=600)
+            assert p.returncode == 0, err[-3000:]
+
+    for phase in ("first", "resume"):
+        port = _free_port()
+        wait([run("process", phase, tmp_path / "multi", tmp_path / f"p{k}.npy", k, port) for k in (0, 1)])
+        if phase == "first":
+            assert sorted(os.listdir(tmp_path / "multi" / "r" / "checkpoints")) == ["1"]
+    wait([run("one", "all", tmp_path / "one", tmp_path / "one.npy")])
     ref = np.load(tmp_path / "one.npy")
     for k in (0, 1):
         np.testing.assert_allclose(np.load(tmp_path / f"p{k}.npy"), ref, rtol=1e-6, atol=1e-7)
