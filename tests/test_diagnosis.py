@@ -219,3 +219,14 @@ def test_no_effect_is_named_on_a_misfit_the_physics_step_can_explain():
     sel.step_level = 0.5
     assert not sel._passes(0.5, 5.0, level=0.4)
     assert sel._passes(0.5, 5.0, level=0.6)
+
+
+def test_the_first_effect_needs_a_smaller_gain_than_the_ones_after_it():
+    """``SelectConfig.min_gain_first``: on the nominal re-fit a 3% lower validation error (with a
+    significant t) names an effect; on top of a named effect the same gain does not."""
+    sel, _ = _selector({})
+    sel.cfg = dataclasses.replace(sel.cfg, floor_level=0.0, floor_step=0.0, min_gain_first=0.02, min_gain=0.05)
+    assert sel._passes(0.97, 3.0, level=1.0, first=True)
+    assert not sel._passes(0.97, 3.0, level=1.0, first=False)
+    assert not sel._passes(0.99, 3.0, level=1.0, first=True)
+    assert sel._passes(0.9, 3.0, level=1.0, first=False)

@@ -61,6 +61,7 @@ class DiagnoseConfig:
       num_windows: time windows per recording when locating the mismatch.
       coulomb_eps: velocity scale of the smooth Coulomb model (joint units / s).
       min_gain: an effect must lower the validation error by this fraction ...
+      min_gain_first: ... (the first effect, on the nominal re-fit: by this fraction) ...
       min_t: ... with a paired t-statistic over validation segments at least this large ...
       floor_level: ... on a model that misfits the validation data by more than this (its
         objective per residual, in units of each signal's noise and precision) ...
@@ -92,6 +93,7 @@ class DiagnoseConfig:
     coulomb_eps: float = 1e-3
     # the selection's thresholds: tuned once, stated once (``select.SelectConfig``)
     min_gain: float = SelectConfig.min_gain
+    min_gain_first: float = SelectConfig.min_gain_first
     min_t: float = SelectConfig.min_t
     floor_level: float = SelectConfig.floor_level
     floor_step: float = SelectConfig.floor_step
@@ -109,8 +111,8 @@ class DiagnoseConfig:
             raise ValueError("model=PATH.xml is required")
         if not self.recordings:
             raise ValueError("recordings=[a.csv,...] is required")
-        for key in ("window_seconds", "horizon_seconds", "coulomb_eps", "min_gain", "min_t", "tie_tolerance",
-                    "floor_level", "floor_step", "strong"):
+        for key in ("window_seconds", "horizon_seconds", "coulomb_eps", "min_gain", "min_gain_first", "min_t",
+                    "tie_tolerance", "floor_level", "floor_step", "strong"):
             v = getattr(self, key)
             if not math.isfinite(v) or v < 0:
                 raise ValueError(f"{key}={v}: must be a finite number >= 0")
@@ -351,8 +353,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             cands = [c for c in cands if not c.target or c.target in cfg.targets]
         bar.step(text="fitting")
         sel = Selector(fitter, system.nominal, cands,
-                       SelectConfig(cfg.min_gain, cfg.min_t, cfg.floor_level, cfg.strong, cfg.top, cfg.max_effects,
-                                    floor_step=cfg.floor_step),
+                       SelectConfig(min_gain=cfg.min_gain, min_t=cfg.min_t, min_gain_first=cfg.min_gain_first,
+                                    floor_level=cfg.floor_level, strong=cfg.strong, top=cfg.top,
+                                    max_effects=cfg.max_effects, floor_step=cfg.floor_step),
                        progress=lambda text: bar.step(0, text), step_level=step_level)
         final, steps = sel.run()
         bar.step(text="checking on held-out data")

@@ -91,6 +91,10 @@ class SelectConfig:
 
     Attributes:
       min_gain: a candidate must lower the validation error by this fraction ...
+      min_gain_first: ... or by this fraction when it is the first effect, on the nominal re-fit
+        (there the step floor below and the backward check guard against an effect that absorbs
+        noise; after a named effect, what is left is mostly the data's own precision, and a small
+        gain there names a false second effect: tuning half, a delay beside a sensor offset) ...
       min_t: ... with a paired t-statistic over the validation segments at least this large ...
       floor_level: ... and, unless its gain is ``strong``, the model it extends must misfit the
         validation data by more than this: its validation objective per residual (residuals are
@@ -106,6 +110,7 @@ class SelectConfig:
 
     min_gain: float = 0.05
     min_t: float = 2.0
+    min_gain_first: float = 0.02
     floor_level: float = 0.003
     strong: float = 0.0
     top: int = 4
@@ -294,10 +299,12 @@ class Selector:
         n = max(M.result.n / max(len(self.fit_tiles), 1), 1) * len(self.val_tiles)
         return float(np.sum(M.val) / n)
 
-    def _passes(self, ratio, t, level=float("inf")) -> bool:
+    def _passes(self, ratio, t, level=float("inf"), first=False) -> bool:
+        """The test of a model against the one it extends (``first``: that one has no effect)."""
         c = self.cfg
         floor = max(c.floor_level, c.floor_step * self.step_level)
-        return ratio <= 1 - c.min_gain and t >= c.min_t and (level > floor or ratio <= c.strong)
+        gain = c.min_gain_first if first else c.min_gain
+        return ratio <= 1 - gain and t >= c.min_t and (level > floor or ratio <= c.strong)
 
     def _try(self, M: Model, trial: Trial) -> Trial:
         """Fit the candidate on top of ``M`` (validation comes later, batched: ``_judge_all``)."""
@@ -326,7 +333,7 @@ class Selector:
         for t in trials:
             t.val_ratio, t.t = self.judge(M, t.model)
             t.base_level = level
-            t.passed = self._passes(t.val_ratio, t.t, level) and t.model.result.phi < M.result.phi
+            t.passed = self._passes(t.val_ratio, t.t, level, not M.effects) and t.model.result.phi < M.result.phi
 
     def _asymmetry(self, M: Model, trial: Trial) -> Trial:
         """Coulomb friction with a level per direction, kept if it passes against the symmetric fit."""
@@ -487,7 +494,7 @@ class Selector:
             for c in M.effects:
                 R = self._without(M, c)
                 ratio, t = self.judge(R, M)
-                ok = self._passes(ratio, t, self.level(R)) and M.result.phi < R.result.phi
+                ok = self._passes(ratio, t, self.level(R), not R.effects) and M.result.phi < R.result.phi
                 if not ok and (worst is None or ratio > worst[1]):
                     worst = (c, ratio, t, R)
             if worst is None:
