@@ -246,8 +246,10 @@ def write(rows, a: Settings):
                         linestyle="--" if r["stage"] == "ppo_total" else "-")
         ax.set_xlabel("env steps per seed")
         ax.set_ylabel("training episode return")
-        ax.set_title(f"PPO hopper, solid: same envs per GPU; dashed: one GPU with the largest\n"
-                     f"count's whole batch ({curves[0].get('device', '')})", fontsize=9)
+        dashed = any(r["stage"] == "ppo_total" for r in curves)
+        ax.set_title("PPO hopper, same envs per GPU" + ("; dashed: one GPU with the largest\ncount's whole batch"
+                                                        if dashed else "") + f" ({curves[0].get('device', '')})",
+                     fontsize=9)
         ax.grid(alpha=0.3)
         ax.legend()
         fig.tight_layout()
