@@ -47,16 +47,18 @@ def _sibling(name: str):
 
 @dataclasses.dataclass
 class Settings:
-    """stages: comma-separated of env, ppo, reps, esmaml; gpus: GPU counts; env_batch, env_steps:
-    envs per GPU and scan length of the stepping benchmark; ppo_envs: PPO envs per GPU;
-    ppo_minibatches: PPO minibatches per GPU; ppo_minibatches_total: above 0, that many minibatches at
-    every count instead (each GPU's share of a minibatch then holds as many samples as on one GPU: the
-    same work per GPU, fewer gradient steps per env step); ppo_num_steps: rollout length per env and
-    update (with twice the envs and half the rollout, an update has the same samples); ppo_chunk: updates per timed chunk; ppo_steps: env steps
-    per seed; seeds: PPO seeds (vmapped); seed: their base seed; eval_episodes: final deterministic episodes per
-    seed; reps_samples, reps_horizon; population: ES-MAML population (total); es_scale: below 1,
-    es_maml_hopper's small inner loop (a CPU check of the script); repeats: timed calls;
-    timeout: seconds per stage process; tag; out. stage, n: internal (one stage in this process)."""
+    """stages: comma-separated of env, ppo, ppo_total, reps, esmaml; gpus: GPU counts; env_batch,
+    env_steps: envs per GPU and scan length of the stepping benchmark; ppo_envs: PPO envs per GPU;
+    ppo_minibatches: PPO minibatches per GPU; ppo_minibatches_total: above 0, that many minibatches
+    at every count instead (each GPU's share of a minibatch then holds as many samples as on one
+    GPU: the same work per GPU, fewer gradient steps per env step); ppo_num_steps: rollout length per
+    env and update (with twice the envs and half the rollout, an update has the same samples);
+    ppo_chunk: updates per timed chunk; ppo_steps: env steps per seed; ppo_lr: PPO learning rate (0:
+    the config's); seeds: PPO seeds (vmapped); seed: their base seed; eval_episodes: final
+    deterministic episodes per seed; reps_samples, reps_horizon; population: ES-MAML population
+    (total); es_scale: below 1, es_maml_hopper's small inner loop (a CPU check of the script);
+    repeats: timed calls; timeout: seconds per stage process; tag; out. stage, n: internal (one
+    stage in this process)."""
     stages: str = "env,ppo,ppo_total,reps,esmaml"
     gpus: str = "1,2"
     env_batch: int = 131072
@@ -65,6 +67,7 @@ class Settings:
     ppo_minibatches: int = 16
     ppo_minibatches_total: int = 0
     ppo_num_steps: int = 32
+    ppo_lr: float = 0.0
     ppo_chunk: int = 5
     ppo_steps: float = 40e6
     seeds: int = 3
@@ -118,7 +121,8 @@ def stage_ppo(a: Settings, per_gpu: int | None = None) -> dict:
         f"ppo.num_minibatches={a.ppo_minibatches_total or a.ppo_minibatches * k}",
         f"ppo.num_steps={a.ppo_num_steps}", "devices=all", f"total_steps={int(a.ppo_steps)}",
         f"updates_per_chunk={a.ppo_chunk}", "checkpoint_every=1000", f"num_seeds={a.seeds}", f"seed={a.seed}",
-        f"name=gpus{a.n}", "out_dir=/tmp/multi_gpu_runs", "overwrite=true", "progress=false", "tensorboard=false"])
+        f"name=gpus{a.n}", "out_dir=/tmp/multi_gpu_runs", "overwrite=true", "progress=false", "tensorboard=false",
+        *([f"ppo.lr={a.ppo_lr}"] if a.ppo_lr else [])])
     stamps = []
     out = train(cfg, on_chunk=lambda c, m: stamps.append(time.perf_counter()))
     rows = list(csv.DictReader(open(os.path.join(out["run_dir"], "metrics.csv"))))
