@@ -85,20 +85,8 @@ class Settings:
     n: int = 0
 
 
-def _timed(fn, state, repeats):
-    """(compile seconds, median seconds of ``repeats`` calls) of ``state = fn(state)[0]``."""
-    import jax
-    import numpy as np
-
-    t0 = time.perf_counter()
-    state = jax.block_until_ready(fn(state)[0])
-    compile_s = time.perf_counter() - t0
-    ts = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        state = jax.block_until_ready(fn(state)[0])
-        ts.append(time.perf_counter() - t0)
-    return compile_s, float(np.median(ts))
+def _counts(a: Settings) -> list[int]:
+    return [int(g) for g in a.gpus.split(",")]
 
 
 def stage_env(a: Settings) -> dict:
@@ -146,16 +134,15 @@ def stage_ppo(a: Settings, per_gpu: int | None = None) -> dict:
 def stage_reps(a: Settings) -> dict:
     import jax
 
-    so, st, real = _sibling("reps_update").setup(a.reps_samples, a.reps_horizon, 1, spread=True)
+    reps_update = _sibling("reps_update")
+    so, st, real = reps_update.setup(a.reps_samples, a.reps_horizon, 1, spread=True)
     step = jax.jit(so.reps_step)
-    compile_s, sec = _timed(lambda s: step(s, real), st, a.repeats)
+    compile_s, sec, _ = reps_update.timed(lambda s: step(s, real), st, a.repeats)
     return {"samples": a.reps_samples, "horizon": a.reps_horizon, "seconds_per_update": sec,
             "env_steps_per_s": a.reps_samples * a.reps_horizon / sec, "compile_s": compile_s}
 
 
 def stage_esmaml(a: Settings) -> dict:
-    import dataclasses as dc
-
     import jax
 
     from sim2real.common import config as config_lib
@@ -164,16 +151,16 @@ def stage_esmaml(a: Settings) -> dict:
 
     esm = _sibling("es_maml_hopper")
     cfg = config_lib.load(TrainConfig, esm.BASE)
-    es = esm.make_esmaml(make("hopper"), dc.replace(cfg.ppo, data_parallel=True),
+    es = esm.make_esmaml(make("hopper"), dataclasses.replace(cfg.ppo, data_parallel=True),
                          esm.Settings(population=a.population, scale=a.es_scale))
     st = jax.jit(es.init)(jax.random.PRNGKey(0))
-    compile_s, sec = _timed(jax.jit(es.update), st, a.repeats)
+    compile_s, sec, _ = _sibling("reps_update").timed(jax.jit(es.update), st, a.repeats)
     return {"population": a.population, "seconds_per_meta_iteration": sec, "meta_iterations_per_s": 1.0 / sec,
             "env_steps_per_s": es.env_steps_per_update() / sec, "compile_s": compile_s}
 
 
 def stage_ppo_total(a: Settings) -> dict:
-    return stage_ppo(a, per_gpu=max(int(g) for g in a.gpus.split(",")))
+    return stage_ppo(a, per_gpu=max(_counts(a)))
 
 
 STAGES = {"env": stage_env, "ppo": stage_ppo, "ppo_total": stage_ppo_total, "reps": stage_reps,
@@ -197,7 +184,7 @@ def main(a: Settings):
     for stage in a.stages.split(","):
         if stage not in STAGES:
             raise SystemExit(f"stages: unknown stage {stage!r} (choose from {', '.join(STAGES)})")
-        counts = [int(g) for g in a.gpus.split(",")]
+        counts = _counts(a)
         for n in counts:
             if stage == "ppo_total" and n == max(counts):
                 continue  # that count's own ppo row is this configuration

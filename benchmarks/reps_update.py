@@ -64,6 +64,23 @@ def setup(samples: int, steps: int, real_rollouts: int, spread: bool = False):
     return so, st, real
 
 
+def timed(fn, state, repeats: int):
+    """``(compile seconds, median seconds of repeats calls, last output)`` of ``fn(state) -> (state,
+    ...)`` called with its own output's state: the first call (compilation) apart, then ``repeats``."""
+    import jax
+    import numpy as np
+
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(fn(state))
+    compile_s = time.perf_counter() - t0
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(fn(out[0]))
+        times.append(time.perf_counter() - t0)
+    return compile_s, float(np.median(times)), out
+
+
 def main(args: Settings):
     import jax
     import numpy as np
@@ -73,17 +90,7 @@ def main(args: Settings):
     for R in args.real:
         so, st, real = setup(args.samples, args.steps, R)
         step = jax.jit(so.reps_step)
-        t0 = time.perf_counter()
-        s2, info = step(st, real)
-        jax.block_until_ready(s2)
-        compile_s = time.perf_counter() - t0
-        times = []
-        for _ in range(args.repeats):
-            t0 = time.perf_counter()
-            s2, info = step(s2, real)
-            jax.block_until_ready(s2)
-            times.append(time.perf_counter() - t0)
-        sec = float(np.median(times))
+        compile_s, sec, (s2, info) = timed(lambda s: step(s, real), st, args.repeats)
         row = {"tag": args.tag, "device": device, "samples": args.samples, "steps": args.steps, "real_rollouts": R,
                "env_steps": args.samples * args.steps * R, "seconds_per_update": round(sec, 4),
                "env_steps_per_s": round(args.samples * args.steps * R / sec), "compile_s": round(compile_s, 1),

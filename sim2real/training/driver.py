@@ -17,6 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from sim2real.rl import data_parallel
 from sim2real.rl.data_parallel import host_value
 from sim2real.training import checkpoint
 from sim2real.envs import parallel
@@ -138,8 +139,6 @@ def resolve_devices(cfg: TrainConfig) -> TrainConfig:
         cfg = dataclasses.replace(cfg, devices="all")
     if cfg.devices == "one" or cfg.ppo.spreads:
         return cfg
-    from sim2real.rl import data_parallel
-
     on = dataclasses.replace(cfg, ppo=dataclasses.replace(cfg.ppo, data_parallel=True))
     if cfg.devices == "auto":
         devs = jax.devices()
