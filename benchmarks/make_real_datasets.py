@@ -1,6 +1,8 @@
 """How the bundled real datasets were converted (run once; the results are in sim2real/sysid/data/).
 
     python benchmarks/make_real_datasets.py dfki=PATH/torque_limited_simple_pendulum
+    python benchmarks/make_real_datasets.py ibm=PATH/tiny-differentiable-simulator
+
 
 DFKI torque-limited simple pendulum (BSD-3-Clause, github.com/dfki-ric-underactuated-lab/
 torque_limited_simple_pendulum, commit ed17ea2d): two swing-ups recorded on the real pendulum
@@ -9,6 +11,14 @@ motor reported (from its current). Converted to the recording format: ``qpos:hin
 ``qvel:hinge`` (rad/s), ``ctrl:motor`` = the measured torque (N m), the input the mechanics
 received, as the lab's own identification used it. The SAC run's first row is dropped (the
 logger's first interval is 22 ms, the others 5 ms).
+
+IBM Double Pendulum Chaotic (CDLA-Sharing-1.0; Asseman, Kornuta & Ozcan 2018; the CSVs as
+redistributed with their licence in github.com/erwincoumans/tiny-differentiable-simulator,
+``data/ibm-double-pendulum/original/dpc_dataset_csv``): a free double pendulum filmed at 400 Hz,
+each row the pixel positions (x right, y down) of three markers -- pivot, elbow, tip. The angles
+are read from the markers: ``qpos:shoulder`` = the first arm from the downward vertical,
+``qpos:elbow`` = the second arm relative to the first (rad, unwrapped: the arms spin whole turns).
+Runs 0, 1 and 2, their first ``ibm_seconds`` seconds each.
 """
 from __future__ import annotations
 
@@ -38,6 +48,22 @@ def _write(path, cols: dict):
                comments="", fmt="%.9g")
 
 
+def ibm(repo: str, seconds: float) -> None:
+    out = os.path.join(DATA, "ibm_double_pendulum")
+    for run in (0, 1, 2):
+        text = subprocess.run(["git", "--git-dir", repo, "show",
+                               f"HEAD:data/ibm-double-pendulum/original/dpc_dataset_csv/{run}.csv"],
+                              capture_output=True, text=True, check=True).stdout
+        a = np.array([r.split(",") for r in text.strip().splitlines()], float)[: int(round(seconds * 400))]
+        x0, y0, x1, y1, x2, y2 = a.T
+        # the image's y points down, so atan2(dx, dy) is the angle from hanging straight down
+        shoulder = np.unwrap(np.arctan2(x1 - x0, y1 - y0))
+        elbow = np.unwrap(np.arctan2(x2 - x1, y2 - y1)) - shoulder
+        t = np.arange(len(a)) / 400.0
+        _write(os.path.join(out, f"run{run}.csv"), {"time": t, "qpos:shoulder": shoulder, "qpos:elbow": elbow})
+        print(f"run{run}", len(t), "samples", f"{t[-1]:.1f} s")
+
+
 def dfki(repo: str) -> None:
     out = os.path.join(DATA, "dfki_pendulum")
     runs = {"energy_shaping": ("results/control_method_energy_shaping/data_measured.csv", 0),
@@ -51,13 +77,18 @@ def dfki(repo: str) -> None:
 
 @dataclasses.dataclass
 class Settings:
-    """dfki: git folder of dfki-ric-underactuated-lab/torque_limited_simple_pendulum."""
+    """dfki: git folder of dfki-ric-underactuated-lab/torque_limited_simple_pendulum; ibm: git folder
+    of erwincoumans/tiny-differentiable-simulator; ibm_seconds: how much of each IBM run to keep."""
     dfki: str = ""
+    ibm: str = ""
+    ibm_seconds: float = 20.0
 
 
 def main(args: Settings):
     if args.dfki:
         dfki(args.dfki)
+    if args.ibm:
+        ibm(args.ibm, args.ibm_seconds)
 
 
 if __name__ == "__main__":

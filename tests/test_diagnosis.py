@@ -230,3 +230,36 @@ def test_the_first_effect_needs_a_smaller_gain_than_the_ones_after_it():
     assert not sel._passes(0.97, 3.0, level=1.0, first=False)
     assert not sel._passes(0.99, 3.0, level=1.0, first=True)
     assert sel._passes(0.9, 3.0, level=1.0, first=False)
+
+
+_FREE = """<mujoco><option timestep="0.002"/>
+  <worldbody><body name="arm"><joint name="hinge" type="hinge" axis="0 1 0" damping="{damping}"/>
+    <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.01" mass="0.2" contype="0" conaffinity="0"/>
+  </body></worldbody></mujoco>"""
+
+
+def test_a_free_swing_without_actuators_is_diagnosed(tmp_path):
+    """A model with no actuator and recordings with no command (a released pendulum, as in the
+    IBM double-pendulum data): the diagnosis runs to the end. The truth is native MuJoCo with a
+    joint damping the nominal model lacks; the mass scale is not identifiable (no known force)."""
+    (tmp_path / "nominal.xml").write_text(_FREE.format(damping=0))
+    m = mujoco.MjModel.from_xml_string(_FREE.format(damping=0.004))
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(0)
+    names = []
+    for i, q0 in enumerate((1.2, -0.9, 0.7)):
+        mujoco.mj_resetData(m, d)
+        d.qpos[0] = q0
+        rows = []
+        for k in range(400):                                   # 4 s logged at 100 Hz
+            rows.append((k * 0.01, d.qpos[0] + 1e-4 * rng.normal()))
+            for _ in range(5):
+                mujoco.mj_step(m, d)
+        names.append(str(tmp_path / f"swing{i}.csv"))
+        np.savetxt(names[-1], np.array(rows), delimiter=",", header="time,qpos:hinge", comments="")
+    out = tmp_path / "diag"
+    res = diagnose(DiagnoseConfig(model=str(tmp_path / "nominal.xml"), recordings=tuple(names[:2]),
+                                  heldout=(names[2],), out=str(out), plots=False, progress=False))
+    assert (out / "diagnosis.json").exists() and (out / "report.md").exists()
+    assert res["fit"]["after"] <= res["fit"]["before"]
+    assert _named(res) == [("viscous_damping", "hinge")]

@@ -478,3 +478,18 @@ def test_targets_restrict_the_search_and_unknown_ones_are_refused(tmp_path):
         diagnose(DiagnoseConfig(model=PENDULUM, recordings=(paths[0],), out=str(tmp_path / "e"), plots=False,
                                 progress=False, targets=("hinj",)))
     assert not os.path.exists(tmp_path / "e")
+
+
+@pytest.mark.parametrize("folder, model", [("dfki_pendulum", "pendulum.xml"),
+                                           ("ibm_double_pendulum", "double_pendulum.xml")])
+def test_bundled_real_recordings_load_against_their_models(folder, model):
+    """Every bundled recording reads against its nominal MJCF (names, uniform rate, finite)."""
+    import glob
+
+    import mujoco
+
+    from sim2real.sysid.recordings import load_all
+    base = os.path.join(os.path.dirname(os.path.abspath(emps.__file__)), "data", folder)
+    m = mujoco.MjModel.from_xml_path(os.path.join(base, model))
+    recs = load_all(sorted(glob.glob(os.path.join(base, "*.csv"))), m)
+    assert len(recs) >= 2

@@ -347,7 +347,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         check_tiles = sh.tiles.of("heldout") if held else sh.tiles.of("val")
         all_train = np.concatenate([sh.tiles.of("fit"), sh.tiles.of("val")])
         pred0 = sh.predict(z0[None], fitter.v_hat[None], all_train)
-        sc = scales_from(system, trajs[: len(train)], pred0["force"][0].reshape(-1, system.mj.nu))
+        force0 = pred0["force"][0]  # [..., nu]; nu may be 0 (a free swing), so no reshape(-1, 0)
+        sc = scales_from(system, trajs[: len(train)], force0.reshape(int(np.prod(force0.shape[:-1])), system.mj.nu))
         cands = library(system, sc, tuple(cfg.effects))
         if cfg.targets:
             cands = [c for c in cands if not c.target or c.target in cfg.targets]
