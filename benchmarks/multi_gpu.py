@@ -54,7 +54,7 @@ class Settings:
     GPU: the same work per GPU, fewer gradient steps per env step); ppo_num_steps: rollout length per
     env and update (with twice the envs and half the rollout, an update has the same samples);
     ppo_chunk: updates per timed chunk; ppo_steps: env steps per seed; ppo_lr: PPO learning rate (0:
-    the config's); seeds: PPO seeds (vmapped); seed: their base seed; eval_episodes: final
+    the config's); ppo_set: more PPO settings, comma-separated ``key:value`` (e.g. ``clip_eps:0.3``); seeds: PPO seeds (vmapped); seed: their base seed; eval_episodes: final
     deterministic episodes per seed; reps_samples, reps_horizon; population: ES-MAML population
     (total); es_scale: below 1, es_maml_hopper's small inner loop (a CPU check of the script);
     repeats: timed calls; timeout: seconds per stage process; tag; out. stage, n: internal (one
@@ -68,6 +68,7 @@ class Settings:
     ppo_minibatches_total: int = 0
     ppo_num_steps: int = 32
     ppo_lr: float = 0.0
+    ppo_set: str = ""
     ppo_chunk: int = 5
     ppo_steps: float = 40e6
     seeds: int = 3
@@ -110,7 +111,8 @@ def stage_ppo(a: Settings, per_gpu: int | None = None) -> dict:
         f"ppo.num_steps={a.ppo_num_steps}", "devices=all", f"total_steps={int(a.ppo_steps)}",
         f"updates_per_chunk={a.ppo_chunk}", "checkpoint_every=1000", f"num_seeds={a.seeds}", f"seed={a.seed}",
         f"name=gpus{a.n}", "out_dir=/tmp/multi_gpu_runs", "overwrite=true", "progress=false", "tensorboard=false",
-        *([f"ppo.lr={a.ppo_lr}"] if a.ppo_lr else [])])
+        *([f"ppo.lr={a.ppo_lr}"] if a.ppo_lr else []),
+        *[f"ppo.{kv.replace(':', '=', 1)}" for kv in a.ppo_set.split(",") if kv]])
     stamps = []
     out = train(cfg, on_chunk=lambda c, m: stamps.append(time.perf_counter()))
     rows = list(csv.DictReader(open(os.path.join(out["run_dir"], "metrics.csv"))))
@@ -127,6 +129,7 @@ def stage_ppo(a: Settings, per_gpu: int | None = None) -> dict:
     curve = [(int(r["seed"]), int(r["env_steps"]), float(r["episode_return"])) for r in rows
              if float(r.get("episodes", 0) or 0) > 0]
     return {"num_envs": cfg.ppo.num_envs, "num_minibatches": cfg.ppo.num_minibatches, "seeds": cfg.num_seeds,
+            "clip_eps": cfg.ppo.clip_eps, "num_epochs": cfg.ppo.num_epochs, "lr": cfg.ppo.lr,
             "env_steps_per_s": per_chunk / float(np.median(full)), "chunks_timed": len(full),
             "final_return_per_seed": finals, "final_return_mean": float(np.mean(finals)), "curve": curve}
 
@@ -207,7 +210,7 @@ def main(a: Settings):
 def write(rows, a: Settings):
     cols = ["stage", "gpus", "device", "rc", "env_steps_per_s", "speedup", "seconds_per_update",
             "seconds_per_meta_iteration", "meta_iterations_per_s", "final_return_mean", "final_return_per_seed",
-            "batch", "num_envs", "num_minibatches", "seeds", "samples", "horizon", "population", "compile_s",
+            "batch", "num_envs", "num_minibatches", "clip_eps", "num_epochs", "lr", "seeds", "samples", "horizon", "population", "compile_s",
             "chunks_timed", "wall_s", "jax", "error"]
     base = {r["stage"]: r.get("env_steps_per_s") for r in rows if r.get("gpus") == 1 and r.get("rc") == 0}
     for r in rows:
