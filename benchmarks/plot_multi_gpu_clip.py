@@ -1,0 +1,51 @@
+"""The PPO curves behind issue 26's "same return at the same per-GPU batch" (committed JSON of
+``multi_gpu.py`` runs, hopper, 16,384 envs per GPU, 100M env steps per seed), on one plot:
+1 GPU with the config's clip 0.2, 2 GPUs with clip 0.2, 2 GPUs with clip 1.0.
+
+    python benchmarks/plot_multi_gpu_clip.py     # writes results/multi_gpu/h200_clip_ppo.png
+"""
+from __future__ import annotations
+
+import json
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+R = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "multi_gpu")
+# (label, colour, [(file, key in it, first seed number)])
+GROUPS = [
+    ("1 GPU, clip 0.2 (the config)", "C0", [("h200x2_100M_ppo_curves.json", "ppo_1", 0),
+                                             ("h200x4_g1_clip_0p2_seed1_mbtotal0_ppo_curves.json", "ppo_1", 3),
+                                             ("h200x4_g1_clip_0p2_seed2_mbtotal0_ppo_curves.json", "ppo_1", 6)]),
+    ("2 GPUs, clip 0.2", "C3", [("h200x2_100M_ppo_curves.json", "ppo_2", 0)]),
+    ("2 GPUs, clip 1.0", "C2", [("h200x4_clip_eps_1p0_seed0_ppo_curves.json", "ppo_2", 0),
+                                ("h200x4_clip_eps_1p0_seed1_ppo_curves.json", "ppo_2", 3),
+                                ("h200x4_g2_clip_1p0_seed2_mbtotal0_ppo_curves.json", "ppo_2", 6)]),
+]
+
+
+def main():
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for label, color, runs in GROUPS:
+        first = True
+        for name, key, _ in runs:
+            curve = json.load(open(os.path.join(R, name)))[key]
+            for s in sorted({c[0] for c in curve}):
+                pts = sorted((x, y) for seed, x, y in curve if seed == s)
+                ax.plot(*zip(*pts), color=color, alpha=0.7, lw=1, label=label if first else None)
+                first = False
+    ax.set_xlabel("env steps per seed")
+    ax.set_ylabel("training episode return")
+    ax.set_title("PPO hopper, 16,384 envs per GPU, NVIDIA H200 (one line per seed)", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(R, "h200_clip_ppo.png"), dpi=120)
+    print("wrote", os.path.join(R, "h200_clip_ppo.png"))
+
+
+if __name__ == "__main__":
+    main()
