@@ -6,13 +6,17 @@
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
+import sys
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+from sim2real.common.cli import settings  # noqa: E402
 
 R = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "multi_gpu")
 # (label, colour, [(file, key in it, first seed number)])
@@ -27,7 +31,13 @@ GROUPS = [
 ]
 
 
-def main():
+@dataclasses.dataclass
+class Settings:
+    """out: the figure's path."""
+    out: str = os.path.join(R, "h200_clip_ppo.png")
+
+
+def main(args: Settings):
     fig, ax = plt.subplots(figsize=(7, 4.2))
     for label, color, runs in GROUPS:
         first = True
@@ -43,9 +53,9 @@ def main():
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(os.path.join(R, "h200_clip_ppo.png"), dpi=120)
-    print("wrote", os.path.join(R, "h200_clip_ppo.png"))
+    fig.savefig(args.out, dpi=120)
+    print("wrote", args.out)
 
 
 if __name__ == "__main__":
-    main()
+    main(settings(Settings, sys.argv[1:]))
