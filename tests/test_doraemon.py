@@ -56,6 +56,7 @@ def test_bad_settings_are_refused_by_name():
             doraemon_for(f"algo_options.{key}={value}")
 
 
+@pytest.mark.slow  # ~60 s on 2 cores (make test-slow); the fast set keeps the update's own tests above
 def test_training_widens_the_distribution_and_keeps_succeeding(tmp_path):
     cfg = config_lib.load(TrainConfig, BALANCE + [
         f"out_dir={tmp_path}", "name=dor", "algo=doraemon", "total_steps=650_000", "progress=false",

@@ -94,6 +94,7 @@ def _es_overrides(udr_run):
     return es, per_update
 
 
+@pytest.mark.slow  # ~105 s on 2 cores (make test-slow); the fast set keeps ES-MAML's own tests and the PPO driver's resume
 def test_meta_step_runs_in_the_training_driver_vmapped_over_seeds_and_resumes(tmp_path, udr_run):
     """algo=es_maml through scripts/train.py's driver: the jitted meta step vmapped over 2 seeds,
     warm-started from a 1-seed uniform-DR run, interrupted and resumed = uninterrupted."""
