@@ -16,7 +16,8 @@ IBM Double Pendulum Chaotic (CDLA-Sharing-1.0; Asseman, Kornuta & Ozcan 2018; th
 redistributed with their licence in github.com/erwincoumans/tiny-differentiable-simulator,
 ``data/ibm-double-pendulum/original/dpc_dataset_csv``): a free double pendulum filmed at 400 Hz,
 each row the pixel positions (x right, y down) of three markers -- pivot, elbow, tip. The angles
-are read from the markers: ``qpos:shoulder`` = the first arm from the downward vertical,
+are read from the markers (the camera lies on its side: gravity is the image's +x), ``qpos:shoulder``
+= the first arm from the downward vertical,
 ``qpos:elbow`` = the second arm relative to the first (rad, unwrapped: the arms spin whole turns).
 Runs 0, 1 and 2, their first ``ibm_seconds`` seconds each.
 """
@@ -56,9 +57,13 @@ def ibm(repo: str, seconds: float) -> None:
                               capture_output=True, text=True, check=True).stdout
         a = np.array([r.split(",") for r in text.strip().splitlines()], float)[: int(round(seconds * 400))]
         x0, y0, x1, y1, x2, y2 = a.T
-        # the image's y points down, so atan2(dx, dy) is the angle from hanging straight down
-        shoulder = np.unwrap(np.arctan2(x1 - x0, y1 - y0))
-        elbow = np.unwrap(np.arctan2(x2 - x1, y2 - y1)) - shoulder
+        # The camera is mounted sideways: gravity points along the image's +x axis (every run's
+        # swing settles about atan2(dx, dy) = 1.55-1.56 rad, i.e. pi/2 less a 0.7 degree tilt), so
+        # the angle from hanging straight down is atan2(dx, dy) - pi/2. The tilt is left in the
+        # data (a sensor offset of ~0.01 rad on the shoulder), as a user's camera would leave it.
+        upper = np.unwrap(np.arctan2(x1 - x0, y1 - y0))
+        elbow = np.unwrap(np.arctan2(x2 - x1, y2 - y1)) - upper  # relative: the camera's turn cancels
+        shoulder = upper - np.pi / 2
         t = np.arange(len(a)) / 400.0
         _write(os.path.join(out, f"run{run}.csv"), {"time": t, "qpos:shoulder": shoulder, "qpos:elbow": elbow})
         print(f"run{run}", len(t), "samples", f"{t[-1]:.1f} s")
