@@ -3,7 +3,6 @@
     python benchmarks/make_real_datasets.py dfki=PATH/torque_limited_simple_pendulum
     python benchmarks/make_real_datasets.py ibm=PATH/tiny-differentiable-simulator
 
-
 DFKI torque-limited simple pendulum (BSD-3-Clause, github.com/dfki-ric-underactuated-lab/
 torque_limited_simple_pendulum, commit ed17ea2d): two swing-ups recorded on the real pendulum
 (AK80-6 quasi-direct-drive motor), each a CSV of time, position, velocity and the torque the
@@ -16,9 +15,9 @@ IBM Double Pendulum Chaotic (CDLA-Sharing-1.0; Asseman, Kornuta & Ozcan 2018; th
 redistributed with their licence in github.com/erwincoumans/tiny-differentiable-simulator,
 ``data/ibm-double-pendulum/original/dpc_dataset_csv``): a free double pendulum filmed at 400 Hz,
 each row the pixel positions (x right, y down) of three markers -- pivot, elbow, tip. The angles
-are read from the markers (the camera lies on its side: gravity is the image's +x), ``qpos:shoulder``
-= the first arm from the downward vertical,
-``qpos:elbow`` = the second arm relative to the first (rad, unwrapped: the arms spin whole turns).
+are read from the markers (the camera lies on its side: gravity is the image's +x):
+``qpos:shoulder`` = the first arm from the downward vertical, ``qpos:elbow`` = the second arm
+relative to the first (rad, unwrapped: the arms spin whole turns).
 Runs 0, 1 and 2, their first ``ibm_seconds`` seconds each.
 """
 from __future__ import annotations
@@ -36,10 +35,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.path.join(HERE, "..", "sim2real", "sysid", "data")
 
 
-def _git_csv(repo: str, path: str) -> np.ndarray:
+def _git_csv(repo: str, path: str, header: bool = True) -> np.ndarray:
     text = subprocess.run(["git", "--git-dir", repo, "show", f"HEAD:{path}"], capture_output=True, text=True,
                           check=True).stdout
-    rows = [r.split(",") for r in text.strip().splitlines()[1:]]
+    rows = [r.split(",") for r in text.strip().splitlines()[1 if header else 0:]]
     return np.array(rows, float)
 
 
@@ -52,10 +51,8 @@ def _write(path, cols: dict):
 def ibm(repo: str, seconds: float) -> None:
     out = os.path.join(DATA, "ibm_double_pendulum")
     for run in (0, 1, 2):
-        text = subprocess.run(["git", "--git-dir", repo, "show",
-                               f"HEAD:data/ibm-double-pendulum/original/dpc_dataset_csv/{run}.csv"],
-                              capture_output=True, text=True, check=True).stdout
-        a = np.array([r.split(",") for r in text.strip().splitlines()], float)[: int(round(seconds * 400))]
+        a = _git_csv(repo, f"data/ibm-double-pendulum/original/dpc_dataset_csv/{run}.csv",
+                     header=False)[: int(round(seconds * 400))]
         x0, y0, x1, y1, x2, y2 = a.T
         # The camera is mounted sideways: gravity points along the image's +x axis (every run's
         # swing settles about atan2(dx, dy) = 1.55-1.56 rad, i.e. pi/2 less a 0.7 degree tilt), so

@@ -54,8 +54,9 @@ class Settings:
     GPU: the same work per GPU, fewer gradient steps per env step); ppo_num_steps: rollout length per
     env and update (with twice the envs and half the rollout, an update has the same samples);
     ppo_chunk: updates per timed chunk; ppo_steps: env steps per seed; ppo_lr: PPO learning rate (0:
-    the config's); ppo_set: more PPO settings, comma-separated ``key:value`` (e.g. ``clip_eps:0.3``); seeds: PPO seeds (vmapped); seed: their base seed; eval_episodes: final
-    deterministic episodes per seed; reps_samples, reps_horizon; population: ES-MAML population
+    the config's); ppo_set: more PPO settings, comma-separated ``key:value`` (e.g. ``clip_eps:0.3``);
+    seeds: PPO seeds (vmapped); seed: their base seed; eval_episodes: final deterministic episodes per
+    seed; reps_samples, reps_horizon; population: ES-MAML population
     (total); es_scale: below 1, es_maml_hopper's small inner loop (a CPU check of the script);
     repeats: timed calls; timeout: seconds per stage process; tag; out. stage, n: internal (one
     stage in this process)."""
@@ -210,8 +211,8 @@ def main(a: Settings):
 def write(rows, a: Settings):
     cols = ["stage", "gpus", "device", "rc", "env_steps_per_s", "speedup", "seconds_per_update",
             "seconds_per_meta_iteration", "meta_iterations_per_s", "final_return_mean", "final_return_per_seed",
-            "batch", "num_envs", "num_minibatches", "clip_eps", "num_epochs", "lr", "seeds", "samples", "horizon", "population", "compile_s",
-            "chunks_timed", "wall_s", "jax", "error"]
+            "batch", "num_envs", "num_minibatches", "clip_eps", "num_epochs", "lr", "seeds", "samples", "horizon",
+            "population", "compile_s", "chunks_timed", "wall_s", "jax", "error"]
     base = {r["stage"]: r.get("env_steps_per_s") for r in rows if r.get("gpus") == 1 and r.get("rc") == 0}
     for r in rows:
         if r.get("env_steps_per_s") and base.get(r["stage"]) and r["stage"] != "ppo_total":

@@ -19,15 +19,15 @@ import matplotlib.pyplot as plt  # noqa: E402
 from sim2real.common.cli import settings  # noqa: E402
 
 R = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "multi_gpu")
-# (label, colour, [(file, key in it, first seed number)])
+# (label, colour, [(file, key in it)]): seeds 0-2, 3-5, 6-8 in that order
 GROUPS = [
-    ("1 GPU, clip 0.2 (the config)", "C0", [("h200x2_100M_ppo_curves.json", "ppo_1", 0),
-                                             ("h200x4_g1_clip_0p2_seed1_mbtotal0_ppo_curves.json", "ppo_1", 3),
-                                             ("h200x4_g1_clip_0p2_seed2_mbtotal0_ppo_curves.json", "ppo_1", 6)]),
-    ("2 GPUs, clip 0.2", "C3", [("h200x2_100M_ppo_curves.json", "ppo_2", 0)]),
-    ("2 GPUs, clip 1.0", "C2", [("h200x4_clip_eps_1p0_seed0_ppo_curves.json", "ppo_2", 0),
-                                ("h200x4_clip_eps_1p0_seed1_ppo_curves.json", "ppo_2", 3),
-                                ("h200x4_g2_clip_1p0_seed2_mbtotal0_ppo_curves.json", "ppo_2", 6)]),
+    ("1 GPU, clip 0.2 (the config)", "C0", [("h200x2_100M_ppo_curves.json", "ppo_1"),
+                                             ("h200x4_g1_clip_0p2_seed1_mbtotal0_ppo_curves.json", "ppo_1"),
+                                             ("h200x4_g1_clip_0p2_seed2_mbtotal0_ppo_curves.json", "ppo_1")]),
+    ("2 GPUs, clip 0.2", "C3", [("h200x2_100M_ppo_curves.json", "ppo_2")]),
+    ("2 GPUs, clip 1.0", "C2", [("h200x4_clip_eps_1p0_seed0_ppo_curves.json", "ppo_2"),
+                                ("h200x4_clip_eps_1p0_seed1_ppo_curves.json", "ppo_2"),
+                                ("h200x4_g2_clip_1p0_seed2_mbtotal0_ppo_curves.json", "ppo_2")]),
 ]
 
 
@@ -41,7 +41,7 @@ def main(args: Settings):
     fig, ax = plt.subplots(figsize=(7, 4.2))
     for label, color, runs in GROUPS:
         first = True
-        for name, key, _ in runs:
+        for name, key in runs:
             curve = json.load(open(os.path.join(R, name)))[key]
             for s in sorted({c[0] for c in curve}):
                 pts = sorted((x, y) for seed, x, y in curve if seed == s)

@@ -486,9 +486,6 @@ def test_bundled_real_recordings_load_against_their_models(folder, model):
     """Every bundled recording reads against its nominal MJCF (names, uniform rate, finite)."""
     import glob
 
-    import mujoco
-
-    from sim2real.sysid.recordings import load_all
     base = os.path.join(os.path.dirname(os.path.abspath(emps.__file__)), "data", folder)
     m = mujoco.MjModel.from_xml_path(os.path.join(base, model))
     recs = load_all(sorted(glob.glob(os.path.join(base, "*.csv"))), m)
