@@ -3,9 +3,9 @@ advantage and observation statistics are summed over devices, so parameters stay
 
 One ``jax.shard_map`` over the mesh axis ``"batch"`` (``envs/parallel.py``) runs the whole update:
 the collection (``rl/rollout.collect`` on the device's envs), GAE (per env, no communication),
-and the epochs. What crosses devices, by ``psum``: each minibatch's total weight with its
-advantage moments (one all-reduce), its gradient with its loss metrics (one), the observation
-statistics and the episode statistics.
+and the epochs. What crosses devices, by ``psum``: each minibatch's gradient with its
+loss metrics (one all-reduce each), every minibatch's weight and advantage moments (one for the
+whole update, before the epochs), the observation statistics and the episode statistics.
 
 Minibatches are *stratified by env*: in every epoch each env permutes its own ``T`` steps with a
 key folded from its global index and gives ``T / num_minibatches`` of them to each minibatch. A
@@ -62,8 +62,7 @@ def update(ppo, st, sample):
         env_ids = first + jnp.arange(b)
         m = T // n_mb
 
-        def epoch(carry, k):
-            params, opt_state = carry
+        def minibatches(k):  # one epoch's minibatches: each [n, b * m, ...]
             perm = jax.vmap(lambda e: jax.random.permutation(jax.random.fold_in(k, e), T))(env_ids)  # [b, T]
             idx = perm.reshape(b, n_mb, m).transpose(1, 0, 2)                                      # [n, b, m]
 
@@ -72,17 +71,25 @@ def update(ppo, st, sample):
                 g = jax.vmap(lambda i: jax.vmap(lambda row, j: row[j])(xt, i))(idx)                # [n, b, m, ...]
                 return g.reshape((n_mb, b * m) + x.shape[2:])
 
-            mbs = jax.tree_util.tree_map(pick, (batch.replace(carry0=None), adv, ret))
+            return jax.tree_util.tree_map(pick, (batch.replace(carry0=None), adv, ret))
+
+        # Every minibatch's weight and advantage moments, all epochs at once, in one all-reduce
+        # before the gradient steps. They depend on the data only (not on the parameters), so this
+        # is the same sum as taking them minibatch by minibatch; it takes a collective out of each
+        # gradient step's sequential chain (the one left is the gradient's). Raw moments
+        # (variance = E[a^2] - mean^2) are exact enough: GAE advantages have a mean small against
+        # their spread, far from where float32 cancellation bites.
+        epoch_keys = jax.random.split(k_learn, cfg.num_epochs)
+        valid, a_all = jax.vmap(lambda k: (lambda mb: (mb[0].valid, mb[1]))(minibatches(k)))(epoch_keys)
+        moments = _psum(jnp.stack([valid.sum(-1), jnp.sum(valid * a_all, -1),
+                                   jnp.sum(valid * jnp.square(a_all), -1)], -1))          # [epochs, n, 3]
+
+        def epoch(carry, k_mom):
+            k, mom = k_mom
 
             def minibatch(carry, mb_data):
                 params, opt_state = carry
-                mb, a, r = mb_data
-                # The minibatch's weight and advantage moments in one all-reduce (each collective
-                # costs its latency, 128 times an update at 32 minibatches x 4 epochs). Raw moments
-                # (variance = E[a^2] - mean^2) are exact enough here: GAE advantages have a mean
-                # small against their spread, far from where float32 cancellation bites.
-                w_sum, s1, s2 = _psum(jnp.stack([mb.valid.sum(), jnp.sum(mb.valid * a),
-                                                 jnp.sum(mb.valid * jnp.square(a))]))
+                (mb, a, r), (w_sum, s1, s2) = mb_data
                 w_sum = jnp.maximum(w_sum, 1.0)
                 if cfg.normalize_adv:  # over the whole minibatch, all devices
                     mu = s1 / w_sum
@@ -92,9 +99,9 @@ def update(ppo, st, sample):
                 updates, opt_state = ppo.tx.update(grads, opt_state, params)
                 return (optax.apply_updates(params, updates), opt_state), info
 
-            return jax.lax.scan(minibatch, (params, opt_state), mbs)
+            return jax.lax.scan(minibatch, carry, (minibatches(k), tuple(mom.T)))
 
-        (params, opt_state), info = jax.lax.scan(epoch, (params, opt_state), jax.random.split(k_learn, cfg.num_epochs))
+        (params, opt_state), info = jax.lax.scan(epoch, (params, opt_state), (epoch_keys, moments))
         if cfg.normalize_obs:
             x = batch.raw_obs.reshape(-1, batch.raw_obs.shape[-1])
             n = _psum(x.shape[0])
