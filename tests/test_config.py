@@ -84,6 +84,19 @@ def test_progress_bar_closes_and_can_be_disabled():
     assert not hasattr(off, "p")
 
 
+def test_progress_bar_prints_stage_lines_where_output_is_not_a_terminal(capsys):
+    """In a log file rich draws nothing until the bar stops; each stage then prints a line."""
+    from sim2real.common.progress import Bar
+
+    with Bar(True, 2, "diagnosis") as bar:
+        assert bar.plain                 # pytest's captured stdout is not a terminal
+        bar.step(text="fitting")
+        bar.step(0, "candidate 1 of 9")  # a relabel inside quiet_s: no line
+        bar.step(text="done")
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("[")]
+    assert [ln.split("] ", 1)[1] for ln in lines] == ["diagnosis 1/2: fitting", "diagnosis 2/2: done"]
+
+
 def test_settings_dataclasses_read_text_as_written_choices_and_required_keys():
     import dataclasses
     from typing import Any, Literal
