@@ -8,10 +8,16 @@ effects)::
     z = env.z_of(**{"mass:pole": 1.2})               # a physics vector, bounds checked
     out = s2r.train(s2r.TrainConfig(env="pendulum", total_steps=200_000))
     d = s2r.diagnose(s2r.DiagnoseConfig(model="robot.xml", recordings=("run1.csv",)))
+
+One side effect: on jaxlib 0.9, ``XLA_FLAGS`` gains ``--xla_cpu_use_fusion_emitters=false`` if JAX
+has not started yet (an XLA CPU slowdown exponential in a kinematic chain's depth; ``_xla_cpu.py``).
 """
 from __future__ import annotations
 
+from sim2real import _xla_cpu
 from sim2real._lazy import exports
+
+_xla_cpu.configure()
 
 __version__ = "0.1.0"
 
