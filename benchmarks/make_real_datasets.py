@@ -2,6 +2,7 @@
 
     python benchmarks/make_real_datasets.py dfki=PATH/torque_limited_simple_pendulum
     python benchmarks/make_real_datasets.py ibm=PATH/tiny-differentiable-simulator
+    python benchmarks/make_real_datasets.py kuka=PATH/FloBaRoID
 
 DFKI torque-limited simple pendulum (BSD-3-Clause, github.com/dfki-ric-underactuated-lab/
 torque_limited_simple_pendulum, commit ed17ea2d): two swing-ups recorded on the real pendulum
@@ -19,6 +20,19 @@ are read from the markers (the camera lies on its side: gravity is the image's +
 ``qpos:shoulder`` = the first arm from the downward vertical, ``qpos:elbow`` = the second arm
 relative to the first (rad, unwrapped: the arms spin whole turns).
 Runs 0, 1 and 2, their first ``ibm_seconds`` seconds each.
+
+KUKA LWR4+ (LGPL-3.0, the licence of github.com/kjyv/FloBaRoID, whose ``data/KUKA/HW`` holds
+them; Bethge et al., RAAD 2017): three excitation runs of a real 7-joint KUKA LWR4+ at IIT, 25 s
+each, logged at ~200 Hz through KUKA's interface (positions, velocities and the joint torque
+sensors' readings). Runs 1 and 2 are the same trajectory recorded 29 min apart, run 3 another. The
+files are Git LFS pointers today; the blobs of 2016 (commits 4e2e5a2, e6c077e) are the data.
+Converted: ``qpos:lwr_<i>_joint`` (rad), ``qvel:lwr_<i>_joint`` (rad/s, the robot's own),
+``ctrl:lwr_<i>_motor`` = the measured joint torque (N m), linearly interpolated from the logger's
+jittered stamps (3.4-6.5 ms) onto a uniform 5 ms grid starting at 0. The nominal MJCF is the
+repository's ``model/kuka_lwr4.urdf`` (inertias "from CentroEPiaggio/kuka-lwr, with
+modifications"; the URDF's joint damping and friction become MuJoCo's ``damping`` and
+``frictionloss``) compiled by MuJoCo with its meshes left out (visual only), a duplicated
+``<origin>`` removed, and a torque motor (gear 1, the URDF's effort limit) added on every joint.
 """
 from __future__ import annotations
 
@@ -77,12 +91,57 @@ def dfki(repo: str) -> None:
         print(name, len(t), "samples", f"{t[-1] - t[0]:.1f} s")
 
 
+KUKA_RUNS = {1: "4e2e5a2", 2: "4e2e5a2", 3: "e6c077e"}  # the last commits holding the npz, not an LFS pointer
+
+
+def kuka(repo: str) -> None:
+    import io
+    import re
+
+    import mujoco
+
+    out = os.path.join(DATA, "kuka_lwr4")
+    os.makedirs(out, exist_ok=True)
+    urdf = subprocess.run(["git", "--git-dir", repo, "show", "HEAD:model/kuka_lwr4.urdf"], capture_output=True,
+                          text=True, check=True).stdout
+    urdf = re.sub(r"<(visual|collision)>.*?</\1>", "", urdf, flags=re.S)  # meshes: looks only
+    urdf = urdf.replace('<origin rpy="0 0 0" xyz="-0.25 0 1"/>\n    <origin rpy="0 0 0" xyz="0 0 0"/>',
+                        '<origin rpy="0 0 0" xyz="-0.25 0 1"/>')  # MuJoCo refuses a repeated element
+    effort = dict(re.findall(r'<joint name="(lwr_\d_joint)".*?<limit effort="([\d.]+)"', urdf, flags=re.S))
+    spec = mujoco.MjSpec.from_string(urdf)
+    spec.modelname = "kuka_lwr4"
+    for j, e in effort.items():
+        spec.add_actuator(name=j.replace("joint", "motor"), target=j, trntype=mujoco.mjtTrn.mjTRN_JOINT,
+                          ctrllimited=True, ctrlrange=[-float(e), float(e)])
+    spec.compile()
+    with open(os.path.join(out, "kuka_lwr4.xml"), "w") as f:
+        f.write("<!-- KUKA LWR4+ from FloBaRoID's model/kuka_lwr4.urdf (LGPL-3.0), compiled by MuJoCo; see\n"
+                "     benchmarks/make_real_datasets.py. The URDF's damping/friction are the joints' damping and\n"
+                "     frictionloss; a torque motor on every joint. -->\n" + spec.to_xml())
+    joints = sorted(effort)
+    for run, commit in KUKA_RUNS.items():
+        raw = subprocess.run(["git", "--git-dir", repo, "show", f"{commit}:data/KUKA/HW/measurements_{run}.npz"],
+                             capture_output=True, check=True).stdout
+        z = np.load(io.BytesIO(raw))
+        t = z["times"] - z["times"][0]
+        grid = np.arange(0.0, t[-1], 0.005)
+        cols = {"time": grid}
+        for key, kind in (("positions", "qpos:{}"), ("velocities", "qvel:{}"), ("torques", "ctrl:{}")):
+            for i, j in enumerate(joints):
+                name = j.replace("joint", "motor") if kind.startswith("ctrl") else j
+                cols[kind.format(name)] = np.interp(grid, t, z[key][:, i])
+        _write(os.path.join(out, f"run{run}.csv"), cols)
+        print(f"run{run}", len(grid), "samples", f"{grid[-1]:.1f} s")
+
+
 @dataclasses.dataclass
 class Settings:
     """dfki: git folder of dfki-ric-underactuated-lab/torque_limited_simple_pendulum; ibm: git folder
-    of erwincoumans/tiny-differentiable-simulator; ibm_seconds: how much of each IBM run to keep."""
+    of erwincoumans/tiny-differentiable-simulator; ibm_seconds: how much of each IBM run to keep; kuka:
+    git folder of kjyv/FloBaRoID."""
     dfki: str = ""
     ibm: str = ""
+    kuka: str = ""
     ibm_seconds: float = 20.0
 
 
@@ -91,6 +150,8 @@ def main(args: Settings):
         dfki(args.dfki)
     if args.ibm:
         ibm(args.ibm, args.ibm_seconds)
+    if args.kuka:
+        kuka(args.kuka)
 
 
 if __name__ == "__main__":

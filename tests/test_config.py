@@ -154,25 +154,27 @@ def test_every_benchmark_reads_its_settings_through_config_load():
 
 
 def test_xla_cpu_flag_is_set_only_where_safe(monkeypatch):
-    """sim2real turns XLA's CPU fusion emitters off on jaxlib 0.9 (a 7-joint arm stepped 290x
+    """sim2real turns XLA's CPU fusion emitters off on jaxlib 0.9 (a 7-link chain stepped 400x
     slower with them) -- never over a user's own setting, never once JAX has started."""
+    import subprocess
+    import sys
     from importlib.metadata import version
+
+    import jax
 
     from sim2real import _xla_cpu
 
-    monkeypatch.setenv("XLA_FLAGS", f"{_xla_cpu.FLAG}=true --xla_other=1")
+    jax.numpy.zeros(1).block_until_ready()  # backends up (with this process's real flags)
+    monkeypatch.setenv("XLA_FLAGS", f"{_xla_cpu.FLAG}=true")
     assert not _xla_cpu.configure()
-    assert os.environ["XLA_FLAGS"] == f"{_xla_cpu.FLAG}=true --xla_other=1"   # the user's word stands
-    import jax
-
-    jax.numpy.zeros(1).block_until_ready()  # backends up: XLA has read its flags already
-    monkeypatch.setenv("XLA_FLAGS", "--xla_other=1")
-    assert not _xla_cpu.configure()
-    assert os.environ["XLA_FLAGS"] == "--xla_other=1"
-    if version("jaxlib").startswith("0.9."):  # and this test process got it at import
-        import subprocess
-        import sys
-
-        r = subprocess.run([sys.executable, "-c", "import os, sim2real; print(os.environ['XLA_FLAGS'])"],
-                           capture_output=True, text=True, env={**os.environ, "XLA_FLAGS": ""})
-        assert r.stdout.strip() == f"{_xla_cpu.FLAG}=false", r.stderr
+    assert os.environ["XLA_FLAGS"] == f"{_xla_cpu.FLAG}=true"   # the user's word stands
+    monkeypatch.setenv("XLA_FLAGS", "")
+    assert not _xla_cpu.configure()          # XLA has read its flags already: too late to matter
+    assert os.environ["XLA_FLAGS"] == ""
+    code = "import os, sim2real; print(os.environ['XLA_FLAGS'])"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env={**os.environ, "XLA_FLAGS": ""})
+    want = f"{_xla_cpu.FLAG}=false" if version("jaxlib").startswith("0.9.") else ""
+    assert r.stdout.strip() == want, r.stderr
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       env={**os.environ, "XLA_FLAGS": f"{_xla_cpu.FLAG}=true"})
+    assert r.stdout.strip() == f"{_xla_cpu.FLAG}=true", r.stderr

@@ -481,7 +481,8 @@ def test_targets_restrict_the_search_and_unknown_ones_are_refused(tmp_path):
 
 
 @pytest.mark.parametrize("folder, model", [("dfki_pendulum", "pendulum.xml"),
-                                           ("ibm_double_pendulum", "double_pendulum.xml")])
+                                           ("ibm_double_pendulum", "double_pendulum.xml"),
+                                           ("kuka_lwr4", "kuka_lwr4.xml")])
 def test_bundled_real_recordings_load_against_their_models(folder, model):
     """Every bundled recording reads against its nominal MJCF (names, uniform rate, finite)."""
     import glob
