@@ -10,7 +10,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from sim2real.sysid.diagnose import DiagnoseConfig, diagnose, relative_change
+from sim2real.sysid.diagnose import DiagnoseConfig, diagnose, far_masses, relative_change
 from sim2real.sysid.trajectory import choose_window, noise_std
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -107,6 +107,18 @@ def test_noise_estimate_gaussian_and_quantised():
     windows = [choose_window(x, noise_std(x), 0.002) for x in
                (fast + 1e-3 * rng.standard_normal(fast.shape), fast + 1e-2 * rng.standard_normal(fast.shape))]
     assert windows[0] < windows[1]
+
+
+def test_masses_refitted_far_from_the_model_are_reported():
+    """A mass >10x or <0.1x the model's (KUKA LWR4+: link 1 at 70 kg) gets a note; damping does not."""
+    refit = {"mass:l1": {"nominal": 2.7, "fitted": 70.2, "unit": "kg"},
+             "mass:l2": {"nominal": 2.7, "fitted": 0.0027, "unit": "kg"},
+             "mass:l3": {"nominal": 2.7, "fitted": 4.45, "unit": "kg"},
+             "damping:j1": {"nominal": 1.2, "fitted": 0.0, "unit": "Nms/rad"}}
+    note = far_masses(refit)
+    assert "mass:l1 2.7 -> 70.2 kg (x26)" in note and "mass:l2" in note
+    assert "mass:l3" not in note and "damping" not in note
+    assert far_masses({"mass:l3": refit["mass:l3"]}) is None
 
 
 def test_relative_changes_read_as_people_read_them():

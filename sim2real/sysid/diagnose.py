@@ -128,6 +128,27 @@ class DiagnoseConfig:
             raise ValueError(f"effects: unknown effect(s) {sorted(unknown)}; the library has {', '.join(ALL_EFFECTS)}")
 
 
+FAR_MASS = 10.0  # a re-fitted mass this many times above or below the model's is reported
+
+
+def far_masses(nominal_refit: dict) -> str | None:
+    """A note naming every re-fitted body mass more than ``FAR_MASS`` times off the model's, or
+    None. Such a mass stands in for physics nothing else could fit (on the KUKA LWR4+ recordings
+    link 1 went from 2.7 to 70 kg where the arm has a constant torque offset the library does not
+    express): the fit may still predict better, but the mass is not a measurement of the body."""
+    off = []
+    for n, r in nominal_refit.items():
+        if n.startswith("mass:") and r["nominal"] > 0:
+            k = r["fitted"] / r["nominal"]
+            if not 1 / FAR_MASS <= k <= FAR_MASS:
+                off.append(f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g} {r['unit']} (x{k:.3g})")
+    if not off:
+        return None
+    return ("re-fitted masses far from the model's: " + ", ".join(off) + f" -- more than {FAR_MASS:g}x off, "
+            "they likely make up for physics the effects library lacks or the model gets wrong; do not read "
+            "them as the bodies' masses")
+
+
 def relative_change(before: float, after: float) -> str:
     """How people read a change of an error: '78% lower', '12% higher', '32x worse'."""
     if before <= 0 or not math.isfinite(before) or not math.isfinite(after):
@@ -523,6 +544,9 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
                           "heldout_nrmse": step_ho[k], "kept": k <= keep})
     nominal_refit = {n: {"nominal": float(spec[n].default), "fitted": float(z_fit[spec.index(n)]),
                          "std": chosen.result.std.get(n), "unit": spec[n].unit} for n in system.nominal}
+    far = far_masses(nominal_refit)
+    if far:
+        notes.append(far)
     # the mismatch before any fit: where the nominal model's predictions and forces are wrong
     # (the nominal model's inverse-dynamics residual serves the mismatch table and the plots)
     rows = invdyn.rows(trajs[: len(train)])
