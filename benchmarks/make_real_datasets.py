@@ -49,9 +49,14 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.path.join(HERE, "..", "sim2real", "sysid", "data")
 
 
-def _git_csv(repo: str, path: str, header: bool = True) -> np.ndarray:
-    text = subprocess.run(["git", "--git-dir", repo, "show", f"HEAD:{path}"], capture_output=True, text=True,
+def _git_show(repo: str, path: str, rev: str = "HEAD") -> bytes:
+    """A file of ``repo`` (a git folder) at ``rev``, as bytes."""
+    return subprocess.run(["git", "--git-dir", repo, "show", f"{rev}:{path}"], capture_output=True,
                           check=True).stdout
+
+
+def _git_csv(repo: str, path: str, header: bool = True) -> np.ndarray:
+    text = _git_show(repo, path).decode()
     rows = [r.split(",") for r in text.strip().splitlines()[1 if header else 0:]]
     return np.array(rows, float)
 
@@ -102,8 +107,7 @@ def kuka(repo: str) -> None:
 
     out = os.path.join(DATA, "kuka_lwr4")
     os.makedirs(out, exist_ok=True)
-    urdf = subprocess.run(["git", "--git-dir", repo, "show", "HEAD:model/kuka_lwr4.urdf"], capture_output=True,
-                          text=True, check=True).stdout
+    urdf = _git_show(repo, "model/kuka_lwr4.urdf").decode()
     urdf = re.sub(r"<(visual|collision)>.*?</\1>", "", urdf, flags=re.S)  # meshes: looks only
     urdf = urdf.replace('<origin rpy="0 0 0" xyz="-0.25 0 1"/>\n    <origin rpy="0 0 0" xyz="0 0 0"/>',
                         '<origin rpy="0 0 0" xyz="-0.25 0 1"/>')  # MuJoCo refuses a repeated element
@@ -120,9 +124,7 @@ def kuka(repo: str) -> None:
                 "     frictionloss; a torque motor on every joint. -->\n" + spec.to_xml())
     joints = sorted(effort)
     for run, commit in KUKA_RUNS.items():
-        raw = subprocess.run(["git", "--git-dir", repo, "show", f"{commit}:data/KUKA/HW/measurements_{run}.npz"],
-                             capture_output=True, check=True).stdout
-        z = np.load(io.BytesIO(raw))
+        z = np.load(io.BytesIO(_git_show(repo, f"data/KUKA/HW/measurements_{run}.npz", commit)))
         t = z["times"] - z["times"][0]
         grid = np.arange(0.0, t[-1], 0.005)
         cols = {"time": grid}

@@ -151,8 +151,6 @@ def test_every_benchmark_reads_its_settings_through_config_load():
         load(mod.Settings, ["sample=5"])
 
 
-
-
 def test_xla_cpu_flag_is_set_only_where_safe(monkeypatch):
     """sim2real turns XLA's CPU fusion emitters off on jaxlib 0.9 (a 7-link chain stepped 400x
     slower with them) -- never over a user's own setting, never once JAX has started."""

@@ -4,6 +4,8 @@ The training driver has its own bar (steps/s and return columns, ``sim2real.trai
 """
 from __future__ import annotations
 
+import time
+
 
 class Bar:
     """``Bar(enabled, total, label, done=0)``; ``step(n, text)`` advances and relabels; ``close()``.
@@ -21,8 +23,6 @@ class Bar:
     def __init__(self, enabled: bool, total: int, label: str, done: int = 0):
         self.enabled = bool(enabled)
         if self.enabled:
-            import time
-
             from rich.progress import Progress
 
             self.p = Progress()
@@ -41,8 +41,6 @@ class Bar:
             self.p.update(self.t, advance=n, **({"description": text} if text is not None else {}))
             self.done += n
             if self.plain and text is not None:
-                import time
-
                 now = time.monotonic()
                 if n > 0 or now - self.last >= self.quiet_s:
                     self.last = now

@@ -79,10 +79,12 @@ def update(ppo, st, sample):
         # gradient step's sequential chain (the one left is the gradient's). Raw moments
         # (variance = E[a^2] - mean^2) are exact enough: GAE advantages have a mean small against
         # their spread, far from where float32 cancellation bites.
+        def moments_of(k):  # [n, 3]: each minibatch's weight, sum of advantages, sum of their squares
+            mb, a, _ = minibatches(k)
+            return jnp.stack([mb.valid.sum(-1), jnp.sum(mb.valid * a, -1), jnp.sum(mb.valid * jnp.square(a), -1)], -1)
+
         epoch_keys = jax.random.split(k_learn, cfg.num_epochs)
-        valid, a_all = jax.vmap(lambda k: (lambda mb: (mb[0].valid, mb[1]))(minibatches(k)))(epoch_keys)
-        moments = _psum(jnp.stack([valid.sum(-1), jnp.sum(valid * a_all, -1),
-                                   jnp.sum(valid * jnp.square(a_all), -1)], -1))          # [epochs, n, 3]
+        moments = _psum(jax.vmap(moments_of)(epoch_keys))                                  # [epochs, n, 3]
 
         def epoch(carry, k_mom):
             k, mom = k_mom
