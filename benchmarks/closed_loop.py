@@ -17,6 +17,12 @@ effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim
 - ``diag_dr_1``: the loop, once (``sim2real/tools/loop.py``: record 3 episodes of the nominal policy,
   diagnose, retrain with ``dr.from_diagnosis``);
 - ``diag_dr_2``: the loop twice (record again with the new policy, diagnose again, retrain).
+- ``oracle_ft``: the oracle's physics, fine-tuned from each seed's nominal policy (the fair upper
+  bound for the loop with ``loop_warm_start=true``: the same steps, the same start).
+
+With ``loop_warm_start=true`` every retraining of the loop starts from the policy that made its
+recordings (``sim2real/tools/loop.py``), so the loop's policies have had the nominal training's
+steps too; ``oracle_ft`` is then the comparison with the same history.
 
 Every policy runs 64 episodes on the real plant (the same initial states for all). Writes
 ``<out>/<env>/results.csv`` (method, seed, return), ``summary.md`` and ``closed_loop.png``, and
@@ -99,7 +105,10 @@ class Settings:
     every training (the config's 1.5M leaves the oracle under-trained); methods: comma-separated;
     only_seeds: run SimOpt and the loop for these seeds only (comma-separated; the nominal policy
     is still trained for all, so seed s is the same chain in every call), to split a long
-    benchmark over several calls with merge=true; device: where it ran, for the summary."""
+    benchmark over several calls with merge=true; device: where it ran, for the summary;
+    loop_warm_start: the loop fine-tunes the recorded policy (``oracle_ft`` is its fair
+    comparison); config_set: extra training settings for every method, ``key=value`` separated by
+    ``;`` (e.g. ``ppo.num_envs=1024;ppo.num_minibatches=16``)."""
     env: str = "pendulum"
     seeds: int = 3
     episodes: int = 64
@@ -110,9 +119,11 @@ class Settings:
     merge: bool = False
     only_seeds: str = ""
     device: str = "2 CPU cores"
+    loop_warm_start: bool = False
+    config_set: str = ""
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
-METHODS = ("nominal", "oracle", "udr_wide", "lsdr", "simopt", "diag_dr_1", "diag_dr_2")
+METHODS = ("nominal", "oracle", "udr_wide", "lsdr", "simopt", "diag_dr_1", "diag_dr_2", "oracle_ft")
 
 
 def main(args: Settings):
@@ -130,7 +141,8 @@ def main(args: Settings):
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, setup['config'])}", "num_seeds=1",
-                                            f"total_steps={args.total_steps}"])
+                                            f"total_steps={args.total_steps}"]
+                          + [a.strip() for a in args.config_set.split(";") if a.strip()])
     methods = [m for m in args.methods.split(",") if m]
     unknown = [m for m in methods if m not in METHODS]
     if unknown:
@@ -149,7 +161,7 @@ def main(args: Settings):
         write(args, setup, rows, diagnoses, seconds, quiet=True)  # each method's scores kept as they come
         print(f"{method:>10s}: " + ", ".join(f"{r:.1f}" for r in rets) + f"  (mean {np.mean(rets):.1f})", flush=True)
 
-    needs_nominal = {"nominal", "simopt", "diag_dr_1", "diag_dr_2"} & set(methods)
+    needs_nominal = {"nominal", "simopt", "diag_dr_1", "diag_dr_2", "oracle_ft"} & set(methods)
     if needs_nominal:
         t = time.time()
         nominal = _train(base, "nominal", work, num_seeds=S)
@@ -161,6 +173,12 @@ def main(args: Settings):
         r = _train(base, "oracle", work, num_seeds=S, dr=DRConfig(fixed=dict(setup["truth"])))
         seconds["oracle"] = time.time() - t
         add("oracle", _scores(r, plant, args.episodes, S))
+    if "oracle_ft" in methods:
+        t = time.time()
+        r = _train(base, "oracle_ft", work, num_seeds=S, dr=DRConfig(fixed=dict(setup["truth"])),
+                   algo_options={"warm_start": nominal})
+        seconds["oracle_ft"] = time.time() - t
+        add("oracle_ft", _scores(r, plant, args.episodes, S))
     if "udr_wide" in methods:
         t = time.time()
         w = setup["wide"]
@@ -175,7 +193,7 @@ def main(args: Settings):
                    dr=DRConfig(params=tuple(w), low=tuple(v[0] for v in w.values()), high=tuple(v[1] for v in w.values())))
         seconds["lsdr"] = time.time() - t
         add("lsdr", _scores(r, plant, args.episodes, S))
-    if not needs_nominal - {"nominal"}:
+    if not needs_nominal - {"nominal", "oracle_ft"}:
         return write(args, setup, rows, diagnoses, seconds)
     # the one real budget: 3 episodes of each seed's nominal policy; SimOpt compares at the env's
     # control step, so it reads the same recordings thinned to that step (the plant logs finer: the
@@ -221,7 +239,7 @@ def main(args: Settings):
             b = dataclasses.replace(base, seed=s)
             try:
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
-                                     run_seed=s, noise=1e-3)
+                                     run_seed=s, noise=1e-3, warm_start=args.loop_warm_start)
             except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
                 _not_run("diag_dr_1", s, f"the diagnosis refused the nominal policy's recordings ({e})")
                 continue
@@ -231,7 +249,7 @@ def main(args: Settings):
             if "diag_dr_2" in methods:
                 try:
                     it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
-                                         seed=200 + s, noise=1e-3)
+                                         seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start)
                 except RecordingError as e:
                     _not_run("diag_dr_2", s, f"the diagnosis refused the first loop's recordings ({e})")
                     continue
@@ -307,7 +325,9 @@ def write(args, setup, rows, diagnoses, seconds, quiet=False):
     nominal = np.mean(by["nominal"]) if "nominal" in by else np.nan
     lines = [f"# Closed loop on the {args.env}: returns on the real plant ({setup['plant']})", "",
              f"Truth (env parameters): {setup['truth']}. {args.episodes} episodes per policy and seed; "
-             f"{args.seeds} seeds (independent chains). {args.device}: runs are not bit-reproducible across machines.",
+             f"{args.seeds} seeds (independent chains). {args.device}: runs are not bit-reproducible across machines."
+             + (" The loop fine-tunes the policy that made its recordings (`loop_warm_start=true`)." if args.loop_warm_start
+                else "") + (f" Training settings: `{args.config_set}`." if args.config_set else ""),
              "", "| method | mean | min | max | gap closed (nominal -> oracle) |", "|---|---|---|---|---|"]
     for m, v in by.items():
         gap = (np.mean(v) - nominal) / (oracle - nominal) if np.isfinite(oracle) and oracle != nominal else np.nan

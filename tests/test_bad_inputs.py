@@ -187,7 +187,7 @@ CASES = [
     ("train_box_lengths", "train", ["dr.params=[mass:pole]", "dr.low=[1,2]", "dr.high=[2]"], {}, "same length"),
     ("train_fixed_outside", "train", ["dr.fixed={mass:pole: -3}"], {}, "'mass:pole' = -3.0 is outside its physical bounds"),
     ("train_env_option", "train", ["env_options.episode_lenght=10"], {}, "unknown config key 'env_options.episode_lenght'. Did you mean: env_options.episode_length"),
-    ("train_algo_option", "train", ["algo_options.alpha=1"], {}, "algo 'udr' takes no algo_options"),
+    ("train_algo_option", "train", ["algo_options.alpha=1"], {}, "unknown config key 'algo_options.alpha'"),
     ("train_config_missing", "train", ["config=nope.yaml"], {}, "config file 'nope.yaml' not found"),
     ("train_config_yaml", "train", ["config=bad.yaml"], {"bad.yaml": "a: [1, 2\n"}, "config file 'bad.yaml' is not valid YAML"),
     ("train_config_list", "train", ["config=bad.yaml"], {"bad.yaml": "- 1\n- 2\n"}, "must hold a mapping"),

@@ -178,11 +178,13 @@ def test_one_loop_iteration_end_to_end(tmp_path):
     loop.main(["env=pendulum", "total_steps=1024", "updates_per_chunk=2", "tensorboard=false", "ppo.num_envs=8",
                "ppo.num_steps=16", "ppo.num_minibatches=2", "ppo.num_epochs=2", "ppo.net.hidden=[16,16]", *SHORT,
                f"target={PLANT}", "episodes=2", "eval_episodes=2", f"out={out}", "progress=false", "noise=1e-3",
-               "diagnose.effects=[coulomb_friction,action_delay]"])  # (a toy policy: keep the answer to what the env can take)
+               "diagnose.effects=[coulomb_friction,action_delay]",  # (a toy policy: keep the answer to what the env can take)
+               "warm_start=true"])
     res = json.load(open(out / "loop.json"))
     assert set(res["scores"]) == {"nominal", "iter_1"}
     cfg = yaml.safe_load(open(out / "iter_1" / "run" / "config.yaml"))
     assert cfg["dr"]["from_diagnosis"].endswith("diagnosis")
+    assert cfg["algo_options"]["warm_start"] == str(out / "nominal")  # fine-tunes the recorded policy
     d = json.load(open(out / "iter_1" / "diagnosis" / "diagnosis.json"))
     # whatever was fitted is the new run's physics: in its box or fixed
     for name in d["fitted_params"]:

@@ -241,6 +241,28 @@ def test_lsdr_warm_start_continues_a_trained_policy_with_a_fresh_optimiser(tmp_p
                    make("pendulum"))
 
 
+def test_udr_warm_start_takes_one_seed_of_a_run_for_every_seed(tmp_path):
+    """The loop fine-tunes the policy that made its recordings: seed k of a several-seed run."""
+    from sim2real.envs import make
+    from sim2real.training.runs import build_algo, load_policy
+
+    train(tiny(tmp_path, "name=a", "num_seeds=2"))
+    _, _, _, params, _ = load_policy(str(tmp_path / "a"))
+    algo = build_algo(tiny(tmp_path, "name=b", "num_seeds=3", f"algo_options.warm_start={tmp_path / 'a'}",
+                           "algo_options.warm_start_seed=1"), make("pendulum"))
+    st = algo.init_seeds(jax.random.split(jax.random.PRNGKey(0), 3))
+    for x, y in zip(jax.tree_util.tree_leaves(st.params), jax.tree_util.tree_leaves(params)):
+        for s in range(3):
+            np.testing.assert_array_equal(np.asarray(x)[s], np.asarray(y)[1])
+    assert (np.asarray(st.update_step) == 0).all()
+    with pytest.raises(ValueError, match="holds 2 seeds"):  # all of a 2-seed run cannot start 3
+        build_algo(tiny(tmp_path, "name=c", "num_seeds=3", f"algo_options.warm_start={tmp_path / 'a'}"),
+                   make("pendulum"))
+    with pytest.raises(ValueError, match="warm_start_seed=2"):
+        build_algo(tiny(tmp_path, "name=c", "num_seeds=1", f"algo_options.warm_start={tmp_path / 'a'}",
+                        "algo_options.warm_start_seed=2"), make("pendulum"))
+
+
 def test_a_run_made_with_overwrite_resumes_from_the_command_line(tmp_path):
     from sim2real.training.driver import config_from_args
 

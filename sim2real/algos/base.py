@@ -101,6 +101,8 @@ class OuterLoop:
       warm_start_from: a finished run folder whose policy starts this algorithm (set from the
         algorithm's options); the driver reads it and calls :meth:`start_from` -- reading run
         folders is the driver's, so no algorithm imports it.
+      warm_start_seed: which seed of that run starts every seed here (-1: all of them, one per
+        seed here, or its only one).
       warm: ``(params [S, ...], obs_stats [S, ...])`` of that policy once :meth:`start_from` ran
         (None otherwise); the algorithm's ``init_seeds`` starts from it.
       adapts: the algorithm meta-learns a policy that adapts to given physics (:meth:`adapt`;
@@ -109,6 +111,7 @@ class OuterLoop:
 
     takes_update_index: bool = False
     warm_start_from: str = ""
+    warm_start_seed: int = -1
     warm: Any = None
     adapts: bool = False
 

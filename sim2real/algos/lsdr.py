@@ -75,6 +75,7 @@ class LSDRConfig:
       warm_start: a finished run folder (same env and network) whose policy starts every seed:
         its parameters and observation statistics, with a fresh optimiser, learning-rate schedule
         and distribution (fine-tuning a trained policy on a new box).
+      warm_start_seed: which of that run's seeds starts them (-1: one per seed, or its only one).
     """
 
     dist: str = "binned"
@@ -94,6 +95,7 @@ class LSDRConfig:
     policy_optimizer: str = "ppo"
     epopt: epopt.EPOptConfig = epopt.EPOptConfig()
     warm_start: str = ""
+    warm_start_seed: int = -1
 
 
 @struct.dataclass
@@ -304,7 +306,7 @@ class LSDR(OuterLoop):
 def _build(env, cfg, learn_dist=True):
     opts = config_lib.from_dict(LSDRConfig, cfg.algo_options, "algo_options.")
     algo = LSDR(env, cfg.ppo, cfg.dr, opts, cfg.num_updates, learn_dist=learn_dist)
-    algo.warm_start_from = opts.warm_start
+    algo.warm_start_from, algo.warm_start_seed = opts.warm_start, opts.warm_start_seed
     return algo
 
 

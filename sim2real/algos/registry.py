@@ -6,11 +6,12 @@ from sim2real.physics.params import UnknownNameError, unknown_name_message
 
 
 def _udr(env, cfg):
-    from sim2real.algos.udr import UDR
+    from sim2real.algos.udr import UDR, UDRConfig
 
-    if cfg.algo_options:
-        raise config_lib.ConfigError(f"algo 'udr' takes no algo_options (got {sorted(cfg.algo_options)})")
-    return UDR(env, cfg.ppo, cfg.dr, cfg.num_updates)
+    opts = config_lib.from_dict(UDRConfig, cfg.algo_options, "algo_options.")
+    algo = UDR(env, cfg.ppo, cfg.dr, cfg.num_updates)
+    algo.warm_start_from, algo.warm_start_seed = opts.warm_start, opts.warm_start_seed
+    return algo
 
 
 BUILDERS = {"udr": _udr}

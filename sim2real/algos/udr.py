@@ -1,6 +1,9 @@
 """Uniform domain randomisation (and fixed physics when the box is empty) around PPO."""
 from __future__ import annotations
 
+import dataclasses
+
+import jax
 import jax.numpy as jnp
 
 from sim2real.algos.base import DRConfig, DRSpace, OuterLoop
@@ -10,6 +13,21 @@ from sim2real.rl.ppo import PPO, PPOConfig, PPOState
 from sim2real.rl.rollout import Context
 
 
+@dataclasses.dataclass(frozen=True)
+class UDRConfig:
+    """``algo_options`` of ``udr`` / the fixed physics.
+
+    Attributes:
+      warm_start: a finished run folder (same env and network) whose policy starts every seed:
+        its parameters and observation statistics, with a fresh optimiser and learning-rate
+        schedule (fine-tuning a trained policy on new physics; ``sim2real/tools/loop.py``).
+      warm_start_seed: which of that run's seeds starts them (-1: one per seed, or its only one).
+    """
+
+    warm_start: str = ""
+    warm_start_seed: int = -1
+
+
 class UDR(OuterLoop):
     """PPO on z ~ U(box), resampled at every reset.
 
@@ -17,6 +35,7 @@ class UDR(OuterLoop):
     """
 
     def __init__(self, env: Env, ppo_cfg: PPOConfig, dr: DRConfig, num_updates: int):
+        self.env = env
         self.space = DRSpace(env, dr)
         ctx = Context.make(env, self.space.names, self.space.low, self.space.high) if len(self.space) else None
         self.ppo = PPO(env, ppo_cfg, num_updates, ctx)
@@ -31,6 +50,14 @@ class UDR(OuterLoop):
 
     def init(self, key) -> PPOState:
         return self.ppo.init(key, self.sampler())
+
+    def init_seeds(self, keys) -> PPOState:
+        """``init`` for every seed's key ``[S, 2]``; the policy from the warm start when one is loaded."""
+        st = jax.vmap(self.init)(keys)
+        if self.warm is None:
+            return st
+        params, obs_stats = self.warm
+        return st.replace(params=params, obs_stats=obs_stats)
 
     def update(self, st: PPOState):
         return self.ppo.update(st, self.sampler())

@@ -49,7 +49,7 @@ def main(argv):
     for k in range(1, own.iterations + 1):
         it = loop.iteration(run, base, own.target, os.path.join(out, f"iter_{k}"), own.episodes,
                             seed=own.seed + k, noise=own.noise, deterministic=own.deterministic,
-                            diagnose_options=diag_opts, progress=own.progress)
+                            diagnose_options=diag_opts, progress=own.progress, warm_start=own.warm_start)
         d = it["diagnosis"]
         print(f"iteration {k}: recorded return {it['real_return']:.1f}; diagnosis: {d['answer']}"
               + "".join(f"; {s['effect']}" + (f"@{s['target']}" if s["target"] else "") + " "

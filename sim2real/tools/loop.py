@@ -6,7 +6,8 @@ One iteration (``iteration``), in ``out/iter_<k>/``:
 2. ``diagnosis/``: the env's own MJCF diagnosed on them (all but the last episode fit, the last
    one held out: ``sysid.diagnose``);
 3. ``run/``: the training config retrained with ``dr.from_diagnosis`` = that diagnosis (the fitted
-   physics, randomised over +- k std: ``algos/from_diagnosis.py``).
+   physics, randomised over +- k std: ``algos/from_diagnosis.py``); with ``warm_start`` it
+   fine-tunes the policy that made the recordings instead of training a new one.
 
 The training config is the same base for every iteration (each diagnosis replaces the last one's
 physics rather than adding to it); each diagnosis is of the real system, so what the first one
@@ -36,6 +37,11 @@ class LoopConfig:
       eval_episodes: episodes on the target that score each policy at the end (>= 1).
       deterministic: record the policy's mean action; overwrite: replace an earlier loop folder;
       progress: progress bars.
+      warm_start: each retraining starts from the policy that made its recordings (its parameters
+        and observation statistics; a fresh optimiser) instead of from scratch, as a researcher
+        fine-tunes the deployed policy. It keeps what that policy learnt where the diagnosed
+        physics is harder to learn from scratch (the cart-pole swing-up against 3 N of stiction:
+        ``benchmarks/closed_loop.py``).
     """
     target: str = ""
     out: str = ""
@@ -48,6 +54,7 @@ class LoopConfig:
     deterministic: bool = True
     overwrite: bool = False
     progress: bool = True
+    warm_start: bool = False
 
     def __post_init__(self):
         from sim2real.common.config import ConfigError
@@ -69,9 +76,11 @@ def env_model_path(env) -> str:
 
 def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: int = 3, seed: int = 0,
               run_seed: int = 0, noise: float = 0.0, deterministic: bool = True, diagnose_options=(),
-              progress: bool = False) -> dict:
+              progress: bool = False, warm_start: bool = False) -> dict:
     """One loop iteration from the policy of ``run_dir`` (seed ``run_seed``); returns what it did
-    (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded episodes)."""
+    (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded episodes).
+    ``warm_start``: the retraining starts from that policy (seed ``run_seed`` for a one-seed
+    ``base``, else each seed from its own)."""
     from sim2real.common import config as config_lib
     from sim2real.envs import make
     from sim2real.envs.registry import env_class
@@ -94,6 +103,9 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
     d = diagnose(dcfg)
     cfg = dataclasses.replace(base, name="run", out_dir=out, resume=False, overwrite=False, progress=progress,
                               dr=dataclasses.replace(base.dr, from_diagnosis=os.path.join(out, "diagnosis")))
+    if warm_start:
+        cfg = dataclasses.replace(cfg, algo_options={**cfg.algo_options, "warm_start": os.path.abspath(run_dir),
+                                                     "warm_start_seed": run_seed if base.num_seeds == 1 else -1})
     res = train(cfg)
     return {"recordings": paths, "real_return": what["mean_return"], "run": res["run_dir"],
             "diagnosis": {"answer": d["answer"],

@@ -163,6 +163,12 @@ def _warm_start(run_dir: str, algo, num_seeds: int):
         raise ValueError(f"warm_start '{run_dir}' has network {wcfg.ppo.net}, this {name} has "
                          f"ppo.net = {algo.ppo.cfg.net}; set the same ppo.net")
     n = jax.tree_util.tree_leaves(params)[0].shape[0]
+    k = algo.warm_start_seed
+    if k >= 0:  # one seed of the run starts them all (a loop fine-tunes the policy it recorded)
+        if k >= n:
+            raise ValueError(f"algo_options.warm_start_seed={k}: '{run_dir}' holds seeds 0..{n - 1}")
+        params, stats = jax.tree_util.tree_map(lambda x: np.asarray(x)[k:k + 1], (params, stats))
+        n = 1
     if n not in (1, num_seeds):
         raise ValueError(f"warm_start '{run_dir}' holds {n} seeds; this run has num_seeds={num_seeds} "
                          f"(set num_seeds={n}, or warm-start from a run with one seed)")
