@@ -9,7 +9,8 @@ its ``command`` / ``damping`` / ``sense`` hooks), run here in order::
     action enters the delay line (once per control step); then every physics sub-step:
       delayed command (exact for fractional delays) -> motor_lag -> backlash
       -> [MuJoCo: saturation via forcerange]; velocity-dependent forces (Coulomb/Stribeck
-      friction, quadratic drag: the ``damping`` hooks of ``physics/kinds/``) as damping terms
+      friction, quadratic drag: the ``damping`` hooks of ``physics/kinds/``) as damping terms;
+      constant generalised forces (torque offsets: the ``force`` hooks) in ``qfrc_applied``
     measured qpos = qpos + sensor_offset + sensor_noise * N(0, 1)
 
 The command path runs at the physics sub-step, so a delay or lag that is not a whole number of
@@ -70,6 +71,10 @@ class Effects:
         self._damping = [(k, *ds) for k in kinds.all_kinds() if (ds := k.damping_setup(m, spec, cfg)) is not None]
         self.damping_dofs = (np.concatenate([d for _, d, _ in self._damping]).astype(np.int32) if self._damping
                              else np.zeros((0,), np.int32))
+        # constant generalised forces: (plug-in, its dofs, its static data) per kind
+        self._force = [(k, *fs) for k in kinds.all_kinds() if (fs := k.force_setup(m, spec)) is not None]
+        self.force_dofs = (np.concatenate([d for _, d, _ in self._force]).astype(np.int32) if self._force
+                           else np.zeros((0,), np.int32))
         # sensing (one kind today: a second one would need its own noise key)
         self._sense = [(k, d) for k in kinds.all_kinds() if (d := k.sense_setup(m, spec)) is not None]
 
@@ -119,6 +124,13 @@ class Effects:
         if not self._damping:
             return self.damping_dofs, jnp.zeros((0,))
         return self.damping_dofs, jnp.concatenate([k.damping(data, z, qvel[dofs]) for k, dofs, data in self._damping])
+
+    def constant_force(self, z) -> tuple[np.ndarray, jax.Array]:
+        """State-independent generalised forces (torque offsets): ``(dof indices [J], force [J])``
+        in N or N m (a dof may repeat: add, do not set); zero where every such effect is off."""
+        if not self._force:
+            return self.force_dofs, jnp.zeros((0,))
+        return self.force_dofs, jnp.concatenate([k.force(data, z) for k, _, data in self._force])
 
     def sense(self, z, qpos, key):
         """Measured joint positions ``[nq]``: offsets and white noise on effect joints."""

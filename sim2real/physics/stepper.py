@@ -26,6 +26,10 @@ def advance(effects: Effects, model: mjx.Model, z, data: mjx.Data, es: EffectSta
       ``(data, effect_state)`` after the step.
     """
     es = effects.push(es, ctrl)
+    if effects.force_dofs.size:  # constant forces (torque offsets) join the known external ones
+        dofs, f = effects.constant_force(z)
+        base = jnp.zeros_like(data.qfrc_applied) if qfrc_applied is None else jnp.asarray(qfrc_applied)
+        qfrc_applied = base.at[dofs].add(f.astype(base.dtype))
     if qfrc_applied is not None:
         data = data.replace(qfrc_applied=qfrc_applied)
     h = dt / substeps

@@ -20,6 +20,7 @@ actuator_saturation    actuator    ``saturation`` (force limit, actuator force u
 backlash               actuator    ``backlash`` (dead band width, joint units), ``backlash_inertia``,
                                    ``backlash_stiffness`` (the mesh's: 0 rigid)
 quadratic_drag         joint       ``drag`` (force -c v|v|; searched only when asked for)
+torque_offset          joint       ``torque_offset`` (a constant signed force; only when asked for)
 =====================  ==========  ==========================================================
 
 Grids are in the system's own scales (``Scales``): the force a joint needs, its speed and

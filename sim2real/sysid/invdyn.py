@@ -2,7 +2,7 @@
 
 For measured positions and their smoothed derivatives (``Trajectory``) and the recorded commands,
 
-    r(z) = qfrc_actuator(u, q, dq; z) + qfrc_known - qfrc_inverse(q, dq, ddq; z) - f_damping(dq; z)
+    r(z) = qfrc_actuator(u, q, dq; z) + qfrc_known + f_const(z) - qfrc_inverse(q, dq, ddq; z) - f_damping(dq; z)
 
 per sample and DOF, with MuJoCo's own ``mj_forward`` / ``mj_inverse`` on the native model of
 ``z``. It differentiates noisy positions twice, so the diagnosis does not decide anything on it
@@ -52,7 +52,10 @@ def residual(system, z, trajs, idx) -> dict[str, np.ndarray]:
         if dofs.size and len(v):
             coef = _damping_coef(fx)(jnp.asarray(z, jnp.float32), jnp.asarray(v, jnp.float32))
             np.add.at(fric, (slice(None), dofs), np.asarray(coef) * v[:, dofs])  # a dof may repeat
-        out["r"].append(act + f - inv - fric)
+        const = np.zeros(v.shape[1])
+        cdofs, cf = fx.constant_force(jnp.asarray(z, jnp.float32))
+        np.add.at(const, cdofs, np.asarray(cf))  # torque offsets (a dof may repeat)
+        out["r"].append(act + f + const - inv - fric)
         out["v"].append(v)
         out["a"].append(a)
         out["act"].append(act)

@@ -13,6 +13,8 @@ hook                who calls it
 ``apply``           ``PhysicsModel.apply``: the ``mjx.Model`` fields a value changes (in ``order``)
 ``damping``         ``Effects.velocity_damping``: a velocity-dependent force written as damping
                     (implicit in MuJoCo's integrator, so stiff laws stay stable)
+``force``           ``Effects.constant_force``: a generalised force independent of the state,
+                    held over the control step (``qfrc_applied``)
 ``command``         ``Effects.actuate``: a stage of the command path, in ``command_order``
                     (delay line 10 -> motor lag 20 -> backlash 30), with its own memory
                     (``command_state``; ``push`` once per control step)
@@ -73,6 +75,14 @@ class Kind:
 
     def damping(self, data, z, qvel):
         """``[J]`` damping to add on its dofs for this physics sub-step (zero where off)."""
+        raise NotImplementedError
+
+    def force_setup(self, m: mujoco.MjModel, spec):
+        """``(dof indices [J], static data)`` for ``force``, or None when this kind adds none."""
+        return None
+
+    def force(self, data, z):
+        """``[J]`` generalised force on its dofs (N or N m), constant over the control step."""
         raise NotImplementedError
 
     # ------------------------------------------------- command path and sensing -------
