@@ -121,6 +121,17 @@ def test_diagnosis_becomes_the_physics_and_a_box_around_it(tmp_path):
     assert from_diagnosis.resolve(dr, env) == dr
 
 
+def test_a_mass_the_diagnosis_flags_as_standing_in_for_missing_physics_is_not_trained_on(tmp_path):
+    env = make("pendulum")
+    diag = _diagnosis(tmp_path, env_model_path(env), {"mass:pole": 13.0, "coulomb:hinge": 0.3},
+                      [{"effect": "coulomb_friction", "target": "hinge", "std": {"coulomb:hinge": 0.01}}],
+                      {"mass:pole": {"nominal": 1.0, "fitted": 13.0, "std": 0.5}})
+    with pytest.warns(UserWarning, match="mass:pole was re-fitted 13, more than 10x off"):
+        dr = from_diagnosis.resolve(DRConfig(from_diagnosis=diag, diagnosis_k=2.0), env)
+    assert "mass:pole" not in dr.params and "mass:pole" not in dr.fixed  # the env keeps its own
+    assert "coulomb:hinge" in dr.params
+
+
 def test_refitted_damping_on_a_joint_the_env_randomises_through_its_viscous_effect(tmp_path):
     """The cart-pole env's joint_damping is the hinge's; a re-fitted rail damping becomes the rail's
     viscous effect (the excess over the nominal 5e-4 N s/m); a fit below the nominal keeps it."""

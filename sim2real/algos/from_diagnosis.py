@@ -7,8 +7,10 @@ its fitted value, and where the fit gave a standard deviation it is randomised o
 ``value +- dr.diagnosis_k * std`` (clipped to the physical bounds). The diagnosis' names are the
 env's (both come from ``physics/catalog.py``) with two translations: the delay is in recording
 samples there and in control steps here, and a joint's declared damping is the env's
-``joint_damping`` where that parameter drives exactly that joint. What the user's ``dr`` already
-names wins. ``train`` resolves this once, before the run folder is written, so ``config.yaml``
+``joint_damping`` where that parameter drives exactly that joint. A re-fitted mass the diagnosis
+itself reports as standing in for missing physics (more than ``FAR_MASS`` times off the model's:
+``diagnose.far_masses``) is not trained on: the env keeps its own, with a warning. What the user's
+``dr`` already names wins. ``train`` resolves this once, before the run folder is written, so ``config.yaml``
 holds the resulting box and fixed values (and a resume reads them, not the diagnosis).
 """
 from __future__ import annotations
@@ -26,6 +28,7 @@ from sim2real.algos.base import DRConfig
 from sim2real.common.config import ConfigError
 from sim2real.envs.base import Env
 from sim2real.physics import catalog
+from sim2real.sysid.diagnose import FAR_MASS
 
 # fitted alongside an effect but with no counterpart in the envs' physics (a payload's distance
 # along the link, the motor inertia crossing a backlash): an error when a selected effect has them
@@ -83,6 +86,12 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
             if name in selected_names:
                 missing.append(name)
             continue
+        if kind == "mass" and name in d["nominal_refit"] and _far(d["nominal_refit"][name]):
+            # the hopper's first loop: a policy that fell at once gave masses 13-18x the model's
+            warnings.warn(f"dr.from_diagnosis: {name} was re-fitted {value:.4g}, more than {FAR_MASS:g}x off the "
+                          f"model's {_default_in_diagnosis(d, name):.4g} (the diagnosis' own note: it stands in "
+                          f"for missing physics); env '{env.name}' keeps its own", stacklevel=2)
+            continue
         if name == "action_delay":  # samples of the recordings -> control steps of the env
             scale = float(d["sample_period"]) / env.dt
             value, sd = value * scale, sd * scale
@@ -109,6 +118,11 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
         raise ConfigError(f"dr.from_diagnosis={d['_path']}: fitted parameter(s) {', '.join(missing)} have no "
                           f"counterpart in env '{env.name}''s physics (its parameters: {', '.join(env.spec.names)})")
     return out
+
+
+def _far(r: dict) -> bool:
+    nominal, fitted = float(r["nominal"]), float(r["fitted"])
+    return nominal > 0 and not 1 / FAR_MASS <= fitted / nominal <= FAR_MASS
 
 
 def _default_in_diagnosis(d: dict, name: str) -> float:
