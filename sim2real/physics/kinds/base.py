@@ -171,6 +171,18 @@ def add_magnitude(add, effect: str, target: str, param: str, c: float, top: floa
     add(effect, target, [param], [(f * c,) for f in (0.03, 0.1, 0.3)], [0.1 * c], [(0.0, top * c)])
 
 
+def add_constant_force(ctx, param: str, name: str, joint: str, force: float) -> None:
+    """Write fitted parameter ``param`` as actuator ``name``, whose force on ``joint`` is its bias
+    ``force`` alone (gain 0: its ``ctrl`` does nothing), appended after the model's own so their
+    ``ctrl`` indices do not change: how a constant force (a friction's asymmetry, a torque offset)
+    is written into MJCF."""
+    a = ctx.spec.add_actuator(name=name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    a.gainprm[0] = 0.0
+    a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+    a.biasprm[:3] = [float(force), 0.0, 0.0]
+    ctx.native(param, f"a constant force {float(force):.6g} on {joint} (actuator '{name}', bias only)")
+
+
 def rows(spec, kind: str, ids) -> np.ndarray:
     """Index into z of ``kind`` for each id in ``ids`` (or -1 where the spec has no such entry)."""
     by_id = {p.index: i for i, p in spec.of_kind(kind)}

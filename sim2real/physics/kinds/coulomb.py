@@ -8,10 +8,9 @@ with no ``frictionloss`` structure in the compiled model (the MJX ``put_model`` 
 from __future__ import annotations
 
 import jax.numpy as jnp
-import mujoco
 import numpy as np
 
-from sim2real.physics.kinds.base import JOINT, Kind, add_magnitude, rows, take
+from sim2real.physics.kinds.base import JOINT, Kind, add_constant_force, add_magnitude, rows, take
 
 
 class Coulomb(Kind):
@@ -63,13 +62,7 @@ class Coulomb(Kind):
             ctx.native(p.name, f"frictionloss with solreffriction=\"{2.0 * float(ctx.spec.option.timestep):.6g} 1\" "
                                "(MuJoCo's hardest: its default 0.02 s softens the stops the fitted law makes)")
         elif p.kind == "coulomb_asym" and v != 0 and ctx.values.get(f"coulomb:{jn}", 0.0) > 0:
-            force = -v * ctx.values[f"coulomb:{jn}"]
-            a = ctx.spec.add_actuator(name=f"sim2real_friction_offset:{jn}", target=jn,
-                                      trntype=mujoco.mjtTrn.mjTRN_JOINT)
-            a.gainprm[0] = 0.0
-            a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-            a.biasprm[:3] = [force, 0.0, 0.0]
-            ctx.native(p.name, f"a constant force {force:.6g} on {jn} (actuator '{a.name}', bias only)")
+            add_constant_force(ctx, p.name, f"sim2real_friction_offset:{jn}", jn, -v * ctx.values[f"coulomb:{jn}"])
         elif p.kind == "stribeck" and v > 0:
             ctx.only_numeric(p.name, "MuJoCo's friction has no breakaway (Stribeck) term")
 

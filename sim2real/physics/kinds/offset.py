@@ -14,7 +14,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from sim2real.physics.kinds.base import JOINT, Kind, rows, take
+from sim2real.physics.kinds.base import JOINT, Kind, add_constant_force, rows, take
 
 _ONE_DOF = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
@@ -40,11 +40,7 @@ class TorqueOffset(Kind):
         if v == 0:
             return
         jn = ctx.system.joints[p.index]
-        a = ctx.spec.add_actuator(name=f"sim2real_torque_offset:{jn}", target=jn, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        a.gainprm[0] = 0.0
-        a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-        a.biasprm[:3] = [float(v), 0.0, 0.0]
-        ctx.native(p.name, f"a constant force {float(v):.6g} on {jn} (actuator '{a.name}', bias only)")
+        add_constant_force(ctx, p.name, f"sim2real_torque_offset:{jn}", jn, v)
 
     def candidates(self, system, sc, add, target) -> None:
         m = system.mj
