@@ -159,6 +159,13 @@ class OuterLoop:
         tile = lambda x: jnp.repeat(jnp.asarray(x), num_seeds // n, axis=0)  # noqa: E731
         self.warm = jax.tree_util.tree_map(tile, (params, obs_stats))
 
+    def warm_ppo(self, ppo_state):
+        """``ppo_state`` (every seed's) with the warm start's policy in it, or as it is without one."""
+        if self.warm is None:
+            return ppo_state
+        params, obs_stats = self.warm
+        return ppo_state.replace(params=params, obs_stats=obs_stats)
+
 
 def metrics_mean(m: dict[str, Any]) -> dict[str, Any]:
     return {k: jnp.mean(v) for k, v in m.items()}

@@ -28,7 +28,7 @@ from sim2real.algos.base import DRConfig
 from sim2real.common.config import ConfigError
 from sim2real.envs.base import Env
 from sim2real.physics import catalog
-from sim2real.sysid.diagnose import FAR_MASS
+from sim2real.sysid.diagnose import FAR_MASS, is_far_mass
 
 # fitted alongside an effect but with no counterpart in the envs' physics (a payload's distance
 # along the link, the motor inertia crossing a backlash): an error when a selected effect has them
@@ -86,7 +86,8 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
             if name in selected_names:
                 missing.append(name)
             continue
-        if kind == "mass" and name in d["nominal_refit"] and _far(d["nominal_refit"][name]):
+        r = d["nominal_refit"].get(name)
+        if kind == "mass" and r and is_far_mass(float(r["nominal"]), float(r["fitted"])):
             # the hopper's first loop: a policy that fell at once gave masses 13-18x the model's
             warnings.warn(f"dr.from_diagnosis: {name} was re-fitted {value:.4g}, more than {FAR_MASS:g}x off the "
                           f"model's {_default_in_diagnosis(d, name):.4g} (the diagnosis' own note: it stands in "
@@ -118,11 +119,6 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
         raise ConfigError(f"dr.from_diagnosis={d['_path']}: fitted parameter(s) {', '.join(missing)} have no "
                           f"counterpart in env '{env.name}''s physics (its parameters: {', '.join(env.spec.names)})")
     return out
-
-
-def _far(r: dict) -> bool:
-    nominal, fitted = float(r["nominal"]), float(r["fitted"])
-    return nominal > 0 and not 1 / FAR_MASS <= fitted / nominal <= FAR_MASS
 
 
 def _default_in_diagnosis(d: dict, name: str) -> float:

@@ -178,10 +178,7 @@ class LSDR(OuterLoop):
     def init_seeds(self, keys) -> LSDRState:
         """``init`` for every seed's key ``[S, 2]``; the policy from the warm start when one is loaded."""
         st = jax.vmap(self.init)(keys)
-        if self.warm is None:
-            return st
-        params, obs_stats = self.warm
-        return st.replace(ppo=st.ppo.replace(params=params, obs_stats=obs_stats))
+        return st.replace(ppo=self.warm_ppo(st.ppo))
 
     takes_update_index = True  # the training driver passes the (unbatched) update index
 

@@ -53,11 +53,7 @@ class UDR(OuterLoop):
 
     def init_seeds(self, keys) -> PPOState:
         """``init`` for every seed's key ``[S, 2]``; the policy from the warm start when one is loaded."""
-        st = jax.vmap(self.init)(keys)
-        if self.warm is None:
-            return st
-        params, obs_stats = self.warm
-        return st.replace(params=params, obs_stats=obs_stats)
+        return self.warm_ppo(jax.vmap(self.init)(keys))
 
     def update(self, st: PPOState):
         return self.ppo.update(st, self.sampler())

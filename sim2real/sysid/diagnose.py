@@ -131,6 +131,11 @@ class DiagnoseConfig:
 FAR_MASS = 10.0  # a re-fitted mass this many times above or below the model's is reported
 
 
+def is_far_mass(nominal: float, fitted: float) -> bool:
+    """A re-fitted mass more than ``FAR_MASS`` times above or below the model's (``far_masses``)."""
+    return nominal > 0 and not 1 / FAR_MASS <= fitted / nominal <= FAR_MASS
+
+
 def far_masses(nominal_refit: dict) -> str | None:
     """A note naming every re-fitted body mass more than ``FAR_MASS`` times off the model's, or
     None. Such a mass stands in for physics nothing else could fit (on the KUKA LWR4+ recordings
@@ -138,10 +143,8 @@ def far_masses(nominal_refit: dict) -> str | None:
     express): the fit may still predict better, but the mass is not a measurement of the body."""
     off = []
     for n, r in nominal_refit.items():
-        if n.startswith("mass:") and r["nominal"] > 0:
-            k = r["fitted"] / r["nominal"]
-            if not 1 / FAR_MASS <= k <= FAR_MASS:
-                off.append(f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g} {r['unit']} (x{k:.3g})")
+        if n.startswith("mass:") and is_far_mass(r["nominal"], r["fitted"]):
+            off.append(f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g} {r['unit']} (x{r['fitted'] / r['nominal']:.3g})")
     if not off:
         return None
     return ("re-fitted masses far from the model's: " + ", ".join(off) + f" -- more than {FAR_MASS:g}x off, "

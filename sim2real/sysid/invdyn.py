@@ -33,6 +33,9 @@ def residual(system, z, trajs, idx) -> dict[str, np.ndarray]:
     d = mujoco.MjData(m)
     fx = system.effects
     out = {k: [] for k in ("r", "v", "a", "act", "ctrl")}
+    const = np.zeros(m.nv)  # torque offsets: the same at every sample
+    cdofs, cf = fx.constant_force(jnp.asarray(z, jnp.float32))
+    np.add.at(const, cdofs, np.asarray(cf))  # (a dof may repeat)
     for tr, ix in zip(trajs, idx):
         q = np.asarray(fx.unsense(jnp.asarray(z, jnp.float32), jnp.asarray(tr.q, jnp.float32)))[ix]
         v, a, u, f = tr.v[ix], tr.a[ix], tr.ctrl[ix], tr.qfrc[ix]
@@ -52,9 +55,6 @@ def residual(system, z, trajs, idx) -> dict[str, np.ndarray]:
         if dofs.size and len(v):
             coef = _damping_coef(fx)(jnp.asarray(z, jnp.float32), jnp.asarray(v, jnp.float32))
             np.add.at(fric, (slice(None), dofs), np.asarray(coef) * v[:, dofs])  # a dof may repeat
-        const = np.zeros(v.shape[1])
-        cdofs, cf = fx.constant_force(jnp.asarray(z, jnp.float32))
-        np.add.at(const, cdofs, np.asarray(cf))  # torque offsets (a dof may repeat)
         out["r"].append(act + f + const - inv - fric)
         out["v"].append(v)
         out["a"].append(a)
