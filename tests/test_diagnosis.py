@@ -177,6 +177,7 @@ class _Stub:
         self.cfg = SelectConfig()
         self.fit_tiles, self.val_tiles = np.arange(10), np.arange(10, 20)
         self.pruned, self.step_level, self.progress = [], 0.0, lambda text: None
+        self._finer, self._fine = None, None
 
 
 def _selector(fits):
@@ -231,6 +232,46 @@ def test_no_effect_is_named_on_a_misfit_the_physics_step_can_explain():
     sel.step_level = 0.5
     assert not sel._passes(0.5, 5.0, level=0.4)
     assert sel._passes(0.5, 5.0, level=0.6)
+
+
+def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
+    """``SelectConfig.finer``: a candidate that halves the validation error of a model already
+    misfitting by less than the physics step alone causes is simulated again (both models) at a
+    finer step: named if it keeps its gain there (a real effect), not if the gain goes with the
+    step (an effect that took up the integrator's error), nor when the check is off."""
+    from sim2real.sysid.candidates import Candidate
+
+    A = Candidate("backlash", "m", ("backlash:m",), ((0.1,),), (1.0,), ((0.0, 1.0),))
+    rng = np.random.default_rng(1)
+    base, half = 40 + rng.uniform(0, 4, 10), 20 + rng.uniform(0, 2, 10)
+    fits = {frozenset(): (5000.0, base), frozenset({"backlash@m"}): (3000.0, half)}
+    sel, fit = _selector(fits)
+    sel.cfg = dataclasses.replace(sel.cfg, floor_level=0.0, floor_step=1.0, finer=4)
+    sel.step_level = 0.5                                   # the base misfits by 0.04 per residual
+    M, C = fit([], 0, 0), fit([A], 0, 0)
+    calls = []
+
+    class Fine:                                            # the same segments at the finer step
+        v_hat = None
+
+        def __init__(self, at_finer):
+            self.at_finer = at_finer
+
+        def velocities_many(self, zs, v0s, tiles):
+            calls.append(len(zs))
+            return [(None, v) for v in self.at_finer]
+
+    sel._finer = lambda k: (Fine([base, half * 1.05]), 0.001)     # the gain stays: named
+    ok, ratio, t, note = sel._accept(M, C, first=True)
+    assert ok and ratio < 0.6 and "4x finer step" in note and "passes" in note
+    sel._fine, sel._finer = None, lambda k: (Fine([base * 0.5, half]), 0.001)   # the gain was the step's
+    assert not sel._accept(M, C, first=True)[0]
+    sel._fine, sel.cfg = None, dataclasses.replace(sel.cfg, finer=0)   # off: the floor decides
+    assert not sel._accept(M, C, first=True)[0]
+    assert calls == [2, 2]
+    # above the floor no finer simulation is needed
+    sel.step_level = 0.01
+    assert sel._accept(M, C, first=True)[0] and calls == [2, 2]
 
 
 def test_the_first_effect_needs_a_smaller_gain_than_the_ones_after_it():

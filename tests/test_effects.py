@@ -75,6 +75,8 @@ def pend():
         "coulomb": {"coulomb:hinge": 3.0},
         "coulomb_pos": {"coulomb:hinge": 1.0, "coulomb_asym:hinge": 0.9},
         "coulomb_neg": {"coulomb:hinge": 1.0, "coulomb_asym:hinge": -0.9},
+        "coulomb_soft": {"coulomb:hinge": 3.0, "coulomb_vel:hinge": 3.0},
+        "coulomb_vel_eps": {"coulomb:hinge": 3.0, "coulomb_vel:hinge": 1e-3},
         "stribeck": {"coulomb:hinge": 1.5, "stribeck:hinge": 1.5, "stribeck_vel:hinge": 0.5},
         "viscous": {"viscous:hinge": 1.0},
         "stiffness": {"stiffness:hinge": 5.0},
@@ -117,6 +119,18 @@ def test_coulomb_asymmetry_acts_by_direction(pend):
     res, _, _ = pend
     a, b = res["coulomb_pos"]["qpos"], res["coulomb_neg"]["qpos"]
     assert np.abs(a - b).max() > 1e-2
+
+
+def test_coulomb_onset_speed(pend):
+    """``coulomb_vel``: the speed over which friction builds up. Left at 0 the plant's
+    ``coulomb_eps`` (1e-3) serves, so setting it to that value changes nothing; a soft onset
+    (3 rad/s, about the swing's speed) lets the pendulum move more than the same level with the
+    default onset."""
+    res, _, env = pend
+    assert env.config.coulomb_eps == 1e-3
+    np.testing.assert_allclose(res["coulomb_vel_eps"]["qpos"], res["coulomb"]["qpos"], atol=1e-6)
+    assert path_length(res["coulomb"]) < 0.9 * path_length(res["coulomb_soft"])
+    assert path_length(res["coulomb_soft"]) < path_length(res["nominal"])
 
 
 def test_saturation_clamps_the_force(pend):

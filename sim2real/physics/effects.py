@@ -62,6 +62,7 @@ class Effects:
 
     def __init__(self, m: mujoco.MjModel, spec: ParamSpec, cfg: EffectsConfig):
         self.nu = m.nu
+        self.cfg = cfg
         # the command path's stages, in their order: (plug-in, its name in the state, static data)
         stages = sorted((k for k in kinds.all_kinds() if k.command_order is not None), key=lambda k: k.command_order)
         self._command = [(k, k.owns[0], d) for k in stages if (d := k.command_setup(m, spec, cfg)) is not None]

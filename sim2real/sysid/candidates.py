@@ -9,7 +9,8 @@ re-solved linearly), then the best are fitted by Gauss-Newton on the simulation 
 =====================  ==========  ==========================================================
 effect                 attached    parameters (spec names)
 =====================  ==========  ==========================================================
-coulomb_friction       joint       ``coulomb`` (+ ``coulomb_asym``: a level per direction)
+coulomb_friction       joint       ``coulomb``, ``coulomb_vel`` (the speed over which it builds up)
+                                   (+ ``coulomb_asym``: a level per direction)
 viscous_damping        joint       ``viscous`` (only where the MJCF declares no damping)
 joint_stiffness        joint       ``stiffness`` (only where the MJCF declares no spring)
 sensor_offset          joint       ``sensor_offset``

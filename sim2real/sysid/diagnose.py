@@ -68,6 +68,8 @@ class DiagnoseConfig:
       floor_step: ... and by more than this many times the misfit the physics step alone causes
         (measured per diagnosis: ``discretization_level``) ...
       strong: ... unless the effect's validation ratio is this low or lower.
+      finer: an effect that passes every test but ``floor_step`` is judged again with a physics
+        step this many times shorter, and passes if it passes there (0: it fails).
       top: candidates fitted in full per selection round (the best by the screen).
       max_effects: at most this many effects are named.
       tie_tolerance: fitted alternatives that passed and whose validation error is within this
@@ -98,6 +100,7 @@ class DiagnoseConfig:
     floor_level: float = SelectConfig.floor_level
     floor_step: float = SelectConfig.floor_step
     strong: float = SelectConfig.strong
+    finer: int = SelectConfig.finer
     top: int = SelectConfig.top
     max_effects: int = SelectConfig.max_effects
     tie_tolerance: float = 0.01
@@ -120,6 +123,8 @@ class DiagnoseConfig:
             raise ValueError(f"val_fraction={self.val_fraction}: must be between 0.05 and 0.6")
         if self.coulomb_eps <= 0:
             raise ValueError("coulomb_eps must be > 0")
+        if self.finer < 0:
+            raise ValueError(f"finer={self.finer}: must be >= 0 (0: off)")
         for key in ("num_windows", "top", "max_effects"):
             if getattr(self, key) < 1:
                 raise ValueError(f"{key}={getattr(self, key)}: must be >= 1")
@@ -366,6 +371,14 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         scales = {n: max(abs(float(spec[n].default)), 1e-6) for n in system.nominal}
         fitter = Fitter(sh, scales)
         step_level = discretization_level(system, trajs[: len(train)], sh)
+
+        def finer(k: int):
+            """The same segments simulated with a physics step ``k`` times shorter (built only when
+            a candidate is blocked by the step's floor alone): their fitter and that step's floor."""
+            fine = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay,
+                          substeps=system.substeps * k)
+            sh_f = Shooting(fine, trajs, H, heldout=heldout_idx, val_fraction=cfg.val_fraction)
+            return Fitter(sh_f, fitter.scales), discretization_level(fine, trajs[: len(train)], sh_f)
         bar.step(text=f"compiling the simulator ({sh.S} segments of {H} samples)")
         z0 = spec.default.copy()
         check_tiles = sh.tiles.of("heldout") if held else sh.tiles.of("val")
@@ -380,8 +393,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         sel = Selector(fitter, system.nominal, cands,
                        SelectConfig(min_gain=cfg.min_gain, min_t=cfg.min_t, min_gain_first=cfg.min_gain_first,
                                     floor_level=cfg.floor_level, strong=cfg.strong, top=cfg.top,
-                                    max_effects=cfg.max_effects, floor_step=cfg.floor_step),
-                       progress=lambda text: bar.step(0, text), step_level=step_level)
+                                    max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer),
+                       progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer)
         final, steps = sel.run()
         bar.step(text="checking on held-out data")
         # held-out check: nothing is kept that predicts held-out data worse than the nominal model

@@ -23,6 +23,9 @@ Forward selection on the simulation error (``fit.py``):
 
 Every decision is judged against two floors (``SelectConfig``): the misfit must exceed what the
 physics step alone causes, measured per diagnosis (``step_level``), and a tiny absolute level.
+A candidate that passes everything but the step's floor is judged again with a physics step
+``finer`` times shorter (``_finer_passes``): an effect that only absorbed the integrator's error
+loses its gain there, a real one keeps it.
 
 A fit whose effect ends at its absent value (``Candidate.is_off``) never names it: its gain is a
 better fit of the current hypothesis, which replaces the current model before the round runs
@@ -104,6 +107,10 @@ class SelectConfig:
         whose remaining misfit the step's own error could explain has nothing left that an
         effect could be trusted with: a damping, a lag would absorb the integrator's error.
       strong: a validation ratio at or below this passes whatever the misfit level.
+      finer: a candidate that passes every test but ``floor_step`` is judged again, the model it
+        extends and it, with a physics step this many times shorter (the same parameters,
+        velocities refined; the floor measured at that step): it passes if it passes there
+        (0: such a candidate fails).
       top: candidates fitted per round; max_effects: effects named at most;
       min_score: candidates scoring less in the screen are not fitted; iters: Gauss-Newton steps.
     """
@@ -118,6 +125,7 @@ class SelectConfig:
     min_score: float = 0.01
     iters: int = 6
     floor_step: float = 1.0
+    finer: int = 4
 
 
 def _paired_t(d: np.ndarray) -> float:
@@ -139,9 +147,12 @@ class Selector:
     """Forward selection over ``candidates`` with ``fitter`` on the fit/validation segments."""
 
     def __init__(self, fitter: Fitter, nominal: list[str], candidates: list[Candidate], cfg: SelectConfig,
-                 progress=None, step_level: float = 0.0):
+                 progress=None, step_level: float = 0.0, finer=None):
+        """``finer(k)``: the fitter of the same segments with a physics step ``k`` times shorter and
+        that step's ``step_level``, or None where none can be built (``SelectConfig.finer``)."""
         self.f, self.nominal, self.cands, self.cfg = fitter, list(nominal), list(candidates), cfg
         self.step_level = float(step_level)
+        self._finer, self._fine = finer, None
         sh = fitter.sh
         self.fit_tiles, self.val_tiles = sh.tiles.of("fit"), sh.tiles.of("val")
         self.spec = sh.sys.spec
@@ -289,22 +300,67 @@ class Selector:
         ``KAPPA`` residuals' worth of noise is added to both errors so that a segment already
         within the data's precision cannot vote with the ratio of two tiny numbers.
         """
-        a, b = np.asarray(M.val), np.asarray(C.val)
+        return self._judge(M, M.val, C.val)
+
+    def _judge(self, M: Model, a, b) -> tuple[float, float]:
+        a, b = np.asarray(a), np.asarray(b)
         ratio = float(np.sum(b) / max(np.sum(a), 1e-300))
         floor = KAPPA * max(M.result.n / max(len(self.fit_tiles), 1), 1.0)
         return ratio, max(_paired_t(a - b), _paired_t(np.log((a + floor) / (b + floor))))
 
-    def level(self, M: Model) -> float:
-        """Validation objective of ``M`` per residual (1: the model misfits by the data's precision)."""
+    def level(self, M: Model, val=None) -> float:
+        """Validation objective of ``M`` (or ``val``, its per-segment values at another step) per
+        residual (1: the model misfits by the data's precision)."""
         n = max(M.result.n / max(len(self.fit_tiles), 1), 1) * len(self.val_tiles)
-        return float(np.sum(M.val) / n)
+        return float(np.sum(M.val if val is None else val) / n)
 
-    def _passes(self, ratio, t, level=float("inf"), first=False) -> bool:
-        """The test of a model against the one it extends (``first``: that one has no effect)."""
+    def _passes(self, ratio, t, level=float("inf"), first=False, step_level=None) -> bool:
+        """The test of a model against the one it extends (``first``: that one has no effect);
+        ``step_level``: the physics step's floor (default: the diagnosis' own step's)."""
         c = self.cfg
-        floor = max(c.floor_level, c.floor_step * self.step_level)
+        floor = max(c.floor_level, c.floor_step * (self.step_level if step_level is None else step_level))
         gain = c.min_gain_first if first else c.min_gain
         return ratio <= 1 - gain and t >= c.min_t and (level > floor or ratio <= c.strong)
+
+    def _accept(self, M: Model, C: Model, first: bool) -> tuple[bool, float, float, str]:
+        """Does ``C`` pass against ``M``? ``(passed, ratio, t, note)``, the note saying when it took
+        the finer step's check (``_finer_passes``)."""
+        ratio, t = self.judge(M, C)
+        level = self.level(M)
+        if not C.result.phi < M.result.phi:
+            return False, ratio, t, ""
+        if self._passes(ratio, t, level, first):
+            return True, ratio, t, ""
+        if self._passes(ratio, t, level, first, step_level=0.0):  # blocked by the step's floor alone
+            ok, note = self._finer_passes(M, C, first)
+            return ok, ratio, t, note
+        return False, ratio, t, ""
+
+    def _finer_passes(self, M: Model, C: Model, first: bool) -> tuple[bool, str]:
+        """``C`` lowers the validation error of a model ``M`` that already misfits by no more than
+        the physics step alone causes: the gain may be the integrator's error taken up (a damping
+        for its numerical dissipation, a lag for its phase). Both are simulated again with a step
+        ``finer`` times shorter, where that error is mostly gone: an effect that only absorbed it
+        now over-corrects and loses its gain; a real one keeps it, on a misfit above the finer
+        step's own floor."""
+        k = self.cfg.finer
+        if k < 2 or self._finer is None:
+            return False, ""
+        if self._fine is None:
+            self.progress(f"building the simulator at a {k}x finer physics step")
+            self._fine = self._finer(k) or (None, None)
+        f2, step2 = self._fine
+        if f2 is None:
+            return False, ""
+        out = f2.velocities_many([M.z, C.z], [f2.v_hat] * 2, self.val_tiles)
+        a, b = out[0][1], out[1][1]
+        ratio, t = self._judge(M, a, b)
+        level = self.level(M, a)
+        ok = self._passes(ratio, t, level, first, step_level=step2)
+        floor = max(self.cfg.floor_level, self.cfg.floor_step * step2)
+        return ok, (f"its base misfits by less than the physics step alone causes ({self.level(M):.3g} per residual, "
+                    f"floor {self.step_level:.3g}); at a {k}x finer step: ratio {ratio:.3f}, t = {t:.1f}, "
+                    f"misfit {level:.3g} against that step's floor {floor:.3g}: {'passes' if ok else 'fails'}")
 
     def _try(self, M: Model, trial: Trial) -> Trial:
         """Fit the candidate on top of ``M`` (validation comes later, batched: ``_judge_all``)."""
@@ -331,9 +387,10 @@ class Selector:
         self.validate([t.model for t in trials])
         level = self.level(M)
         for t in trials:
-            t.val_ratio, t.t = self.judge(M, t.model)
+            t.passed, t.val_ratio, t.t, note = self._accept(M, t.model, not M.effects)
             t.base_level = level
-            t.passed = self._passes(t.val_ratio, t.t, level, not M.effects) and t.model.result.phi < M.result.phi
+            if note:
+                t.note = (t.note + "; " if t.note else "") + note
 
     def _asymmetry(self, M: Model, trial: Trial) -> Trial:
         """Coulomb friction with a level per direction, kept if it passes against the symmetric fit."""
@@ -387,16 +444,18 @@ class Selector:
     def _pair(self, M: Model, tried: list[Trial]) -> tuple[Trial, Trial] | None:
         """When no single effect passes but one lowers the validation error (not consistently
         enough: a saturation that fixes the segments where it bites and costs where a missing
-        delay matters), it is fitted together with each other of the best three fitted ones; the
+        delay matters), every two of the fitted ones (``top``: up to 6 pairs) are fitted together;
+        a candidate that alone predicts worse may be half of the answer (tuning half: a joint
+        stiffness that only helps beside a sensor offset, the fourth of four alone). The
         pair joins the model if it passes the same test against ``M`` and lowers the validation
         error by ``min_gain`` below each of its members alone. Only on the nominal model: on top
-        of a named effect the data are mostly explained, and three more pairs tested on the same
+        of a named effect the data are mostly explained, and more pairs tested on the same
         validation segments would name a false pair (tuning half: a stiffness + backlash beside a
         saturation). Returns ``(first, second)``: the first's single fit and the pair as the
         second's trial, or None."""
         c = self.cfg
         good = sorted([t for t in tried if t.model is not None and t.model.result.phi < M.result.phi],
-                      key=lambda t: t.val_ratio)[:3]
+                      key=lambda t: t.val_ratio)
         if not good or good[0].val_ratio > 1 - c.min_gain:
             return None
         level = self.level(M)
@@ -411,18 +470,17 @@ class Selector:
                 z0[self.spec.indices(list(b.candidate.params))] = b.model.z[self.spec.indices(list(b.candidate.params))]
                 P = self.fit(M.effects + [a.candidate, b.candidate], z0, a.model.result.v0)
                 self.validate([P])
-                ratio, t = self.judge(M, P)
                 alone = min(np.sum(a.model.val), np.sum(b.model.val))
-                if (self._passes(ratio, t, level) and P.result.phi < M.result.phi
-                        and np.sum(P.val) <= (1 - c.min_gain) * alone
+                if (np.sum(P.val) <= (1 - c.min_gain) * alone
+                        and (acc := self._accept(M, P, False))[0]
                         and not any(self._absent(x.candidate, P) for x in (a, b))
                         and (best is None or np.sum(P.val) < np.sum(best[2].val))):
-                    best = (a, b, P, ratio, t)
+                    best = (a, b, P, acc[1], acc[2], acc[3])
         if best is None:
             return None
-        a, b, P, ratio, t = best
+        a, b, P, ratio, t, note = best
         second = Trial(b.candidate, b.score, P, ratio, t, True, level,
-                       note=f"fitted together with {a.candidate.label}: neither passed alone")
+                       note=f"fitted together with {a.candidate.label}: neither passed alone" + (f"; {note}" if note else ""))
         return a, second
 
     def run(self) -> tuple[Model, list[Model]]:
@@ -493,8 +551,7 @@ class Selector:
             worst = None
             for c in M.effects:
                 R = self._without(M, c)
-                ratio, t = self.judge(R, M)
-                ok = self._passes(ratio, t, self.level(R), not R.effects) and M.result.phi < R.result.phi
+                ok, ratio, t, _ = self._accept(R, M, not R.effects)
                 if not ok and (worst is None or ratio > worst[1]):
                     worst = (c, ratio, t, R)
             if worst is None:

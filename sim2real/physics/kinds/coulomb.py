@@ -1,7 +1,8 @@
 """Coulomb friction (with a per-direction asymmetry and a Stribeck breakaway term) on a joint.
 
 Written as ``f(v) = c(v) * v`` with ``c(v) = level(v) * tanh(v/eps) / v >= 0`` and added to the
-joint's damping for the sub-step: MuJoCo's integrators treat damping implicitly, so the stiff
+joint's damping for the sub-step (``eps``: the joint's ``coulomb_vel`` where set, else the plant's
+``coulomb_eps``): MuJoCo's integrators treat damping implicitly, so the stiff
 region near ``v = 0`` stays stable for any ``eps`` and the joint sticks instead of chattering,
 with no ``frictionloss`` structure in the compiled model (the MJX ``put_model`` pitfall).
 """
@@ -14,13 +15,15 @@ from sim2real.physics.kinds.base import JOINT, Kind, add_constant_force, add_mag
 
 
 class Coulomb(Kind):
-    owns = ("coulomb", "coulomb_asym", "stribeck", "stribeck_vel")
+    owns = ("coulomb", "coulomb_asym", "stribeck", "stribeck_vel", "coulomb_vel")
     attach = JOINT
     declares = {
         "coulomb": (0.0, 0.0, 1e4, "N|Nm", "Coulomb friction level Fc opposing joint motion"),
         "coulomb_asym": (0.0, -1.0, 1.0, "-", "asymmetry a: Fc(1+a) for positive, Fc(1-a) for negative velocity"),
         "stribeck": (0.0, 0.0, 1e4, "N|Nm", "extra breakaway friction Fs at zero velocity (Stribeck)"),
         "stribeck_vel": (0.1, 1e-4, 1e2, "m/s|rad/s", "Stribeck velocity vs: breakaway term decays as exp(-(v/vs)^2)"),
+        "coulomb_vel": (0.0, 0.0, 1e2, "m/s|rad/s",
+                        "speed over which the friction builds up to its level (tanh scale; 0: the plant's coulomb_eps)"),
     }
     order = 51
     effect = "coulomb_friction"
@@ -39,7 +42,8 @@ class Coulomb(Kind):
         fc, asym = take(z, data["coulomb"]), take(z, data["coulomb_asym"])
         fs, vs = take(z, data["stribeck"]), take(z, data["stribeck_vel"], 0.1)
         level = fc * (1.0 + asym * jnp.sign(v)) + fs * jnp.exp(-jnp.square(v / vs))
-        eps = data["eps"]
+        ve = take(z, data["coulomb_vel"])
+        eps = jnp.where(ve > 0, ve, data["eps"])
         safe_v = jnp.where(jnp.abs(v) > 1e-12, v, 1.0)
         c = jnp.where(jnp.abs(v) > 1e-12, level * jnp.tanh(v / eps) / safe_v, level / eps)
         return jnp.where(level > 0, c, 0.0)
@@ -63,6 +67,8 @@ class Coulomb(Kind):
                                "(MuJoCo's hardest: its default 0.02 s softens the stops the fitted law makes)")
         elif p.kind == "coulomb_asym" and v != 0 and ctx.values.get(f"coulomb:{jn}", 0.0) > 0:
             add_constant_force(ctx, p.name, f"sim2real_friction_offset:{jn}", jn, -v * ctx.values[f"coulomb:{jn}"])
+        elif p.kind == "coulomb_vel" and v > 0:
+            ctx.only_numeric(p.name, "MuJoCo's friction has no onset speed")
         elif p.kind == "stribeck" and v > 0:
             ctx.only_numeric(p.name, "MuJoCo's friction has no breakaway (Stribeck) term")
 
@@ -70,4 +76,14 @@ class Coulomb(Kind):
         jn = system.joints[target]
         if system.declared_friction(jn):  # a declared frictionloss is re-fitted as a nominal parameter
             return
-        add_magnitude(add, "coulomb_friction", jn, f"coulomb:{jn}", sc.force[target], 2.0)
+        c, v = sc.force[target], sc.speed[target]
+        if f"coulomb_vel:{jn}" not in system.spec:
+            add_magnitude(add, "coulomb_friction", jn, f"coulomb:{jn}", c, 2.0)
+            return
+        # the level, and the speed over which it builds up: friction that sticks harder than the
+        # plant's default smoothing, or one that is soft (pre-sliding; MuJoCo's own frictionloss
+        # is a soft constraint). The tuning half named 2 more friction cases with it fitted.
+        eps = system.effects.cfg.coulomb_eps
+        add("coulomb_friction", jn, [f"coulomb:{jn}", f"coulomb_vel:{jn}"],
+            [(f * c, e) for f in (0.03, 0.1, 0.3) for e in (eps, 0.1 * v)], [0.1 * c, 0.1 * v],
+            [(0.0, 2.0 * c), (0.1 * eps, v)])
