@@ -13,7 +13,10 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import hashlib
 import os
+import platform
+import re
 import sys
 import tempfile
 import time
@@ -143,12 +146,23 @@ class Settings:
     out: str = os.path.join(os.path.dirname(__file__), "results", "concealed_effects")
 
 
+def _cpu_tag() -> str:
+    """A short hash of this CPU's model and instruction-set flags (Linux), else of its platform name."""
+    lines = []
+    if os.path.exists("/proc/cpuinfo"):
+        with open("/proc/cpuinfo") as f:
+            lines = [ln for ln in f.read().split("\n\n")[0].splitlines() if ln.startswith(("flags", "model name"))]
+    return hashlib.sha1("".join([platform.machine(), platform.processor(), *lines]).encode()).hexdigest()[:12]
+
+
 def main(args: Settings):
     import jax
     from rich.progress import Progress
 
-    # every case builds its own System (new traces); the persistent cache skips re-compiling them
-    jax.config.update("jax_compilation_cache_dir", os.path.join(tempfile.gettempdir(), "sim2real_jax_cache"))
+    # every case builds its own System (new traces); the persistent cache skips re-compiling them.
+    # One folder per CPU: XLA's key leaves the host's instruction set out, and a cache written on
+    # another CPU (a VM moved to another host) loads code this one may not run (XLA warns: SIGILL)
+    jax.config.update("jax_compilation_cache_dir", os.path.join(tempfile.gettempdir(), f"sim2real_jax_cache_{_cpu_tag()}"))
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
     todo = [c for c in cases() if args.only in c.label]
     os.makedirs(args.out, exist_ok=True)
@@ -166,7 +180,7 @@ def main(args: Settings):
             bar.console.print(f"{row['case']:45s} -> {row['named_effect']}@{row.get('named_target', '')} "
                               f"{'OK' if row['correct'] else 'WRONG'}  {row.get('named_params', '')}")
             bar.advance(task)
-    suffix = f"_{args.only}" if args.only else ""
+    suffix = "_" + re.sub(r"[^A-Za-z0-9@_.-]", "_", args.only) if args.only else ""  # only=pendulum/none: one file
     keys = list(dict.fromkeys(k for r in rows for k in r))
     with open(os.path.join(args.out, f"cases{suffix}.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, keys)
