@@ -162,6 +162,7 @@ CASES = [
     ("negative_horizon", "diagnose", D + ["recordings=[a.csv]", "horizon_seconds=-1"], {}, "horizon_seconds=-1.0"),
     ("nan_setting", "diagnose", D + ["recordings=[a.csv]", "min_gain=.nan"], {}, "min_gain=nan"),
     ("val_fraction", "diagnose", D + ["recordings=[a.csv]", "val_fraction=0.9"], {}, "val_fraction=0.9"),
+    ("negative_finer", "diagnose", D + ["recordings=[a.csv]", "finer=-1"], {}, "finer=-1: must be >= 0"),
     ("unknown_effect", "diagnose", D + ["recordings=[a.csv]", "effects=[none,fricton]"], {}, "unknown effect(s) ['fricton']"),
     ("not_key_value", "diagnose", ["robot.xml"], {}, "argument 'robot.xml' is not of the form key=value"),
     # ---- training configs -----------------------------------------------------------------------------------

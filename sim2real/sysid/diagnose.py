@@ -69,7 +69,7 @@ class DiagnoseConfig:
         (measured per diagnosis: ``discretization_level``) ...
       strong: ... unless the effect's validation ratio is this low or lower.
       finer: an effect that passes every test but ``floor_step`` is judged again with a physics
-        step this many times shorter, and passes if it passes there (0: it fails).
+        step this many times shorter, and passes if it passes there (0 or 1: it fails).
       top: candidates fitted in full per selection round (the best by the screen).
       max_effects: at most this many effects are named.
       tie_tolerance: fitted alternatives that passed and whose validation error is within this

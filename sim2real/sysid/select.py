@@ -110,7 +110,7 @@ class SelectConfig:
       finer: a candidate that passes every test but ``floor_step`` is judged again, the model it
         extends and it, with a physics step this many times shorter (the same parameters,
         velocities refined; the floor measured at that step): it passes if it passes there
-        (0: such a candidate fails).
+        (0 or 1: such a candidate fails).
       top: candidates fitted per round; max_effects: effects named at most;
       min_score: candidates scoring less in the screen are not fitted; iters: Gauss-Newton steps.
     """
