@@ -318,9 +318,14 @@ class Selector:
         """The test of a model against the one it extends (``first``: that one has no effect);
         ``step_level``: the physics step's floor (default: the diagnosis' own step's)."""
         c = self.cfg
-        floor = max(c.floor_level, c.floor_step * (self.step_level if step_level is None else step_level))
         gain = c.min_gain_first if first else c.min_gain
-        return ratio <= 1 - gain and t >= c.min_t and (level > floor or ratio <= c.strong)
+        return ratio <= 1 - gain and t >= c.min_t and (level > self._floor(step_level) or ratio <= c.strong)
+
+    def _floor(self, step_level=None) -> float:
+        """The misfit a model must exceed for an effect on it to be trusted (``floor_level``,
+        ``floor_step``), at the diagnosis' own step or at one whose floor is ``step_level``."""
+        c = self.cfg
+        return max(c.floor_level, c.floor_step * (self.step_level if step_level is None else step_level))
 
     def _accept(self, M: Model, C: Model, first: bool) -> tuple[bool, float, float, str]:
         """Does ``C`` pass against ``M``? ``(passed, ratio, t, note)``, the note saying when it took
@@ -357,10 +362,9 @@ class Selector:
         ratio, t = self._judge(M, a, b)
         level = self.level(M, a)
         ok = self._passes(ratio, t, level, first, step_level=step2)
-        floor = max(self.cfg.floor_level, self.cfg.floor_step * step2)
         return ok, (f"its base misfits by less than the physics step alone causes ({self.level(M):.3g} per residual, "
                     f"floor {self.step_level:.3g}); at a {k}x finer step: ratio {ratio:.3f}, t = {t:.1f}, "
-                    f"misfit {level:.3g} against that step's floor {floor:.3g}: {'passes' if ok else 'fails'}")
+                    f"misfit {level:.3g} against that step's floor {self._floor(step2):.3g}: {'passes' if ok else 'fails'}")
 
     def _try(self, M: Model, trial: Trial) -> Trial:
         """Fit the candidate on top of ``M`` (validation comes later, batched: ``_judge_all``)."""
@@ -471,10 +475,11 @@ class Selector:
                 P = self.fit(M.effects + [a.candidate, b.candidate], z0, a.model.result.v0)
                 self.validate([P])
                 alone = min(np.sum(a.model.val), np.sum(b.model.val))
+                # the cheap conditions first: ``_accept`` may simulate at a finer step
                 if (np.sum(P.val) <= (1 - c.min_gain) * alone
-                        and (acc := self._accept(M, P, False))[0]
                         and not any(self._absent(x.candidate, P) for x in (a, b))
-                        and (best is None or np.sum(P.val) < np.sum(best[2].val))):
+                        and (best is None or np.sum(P.val) < np.sum(best[2].val))
+                        and (acc := self._accept(M, P, False))[0]):
                     best = (a, b, P, acc[1], acc[2], acc[3])
         if best is None:
             return None

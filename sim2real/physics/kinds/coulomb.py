@@ -11,7 +11,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real.physics.kinds.base import JOINT, Kind, add_constant_force, add_magnitude, rows, take
+from sim2real.physics.kinds.base import JOINT, Kind, add_constant_force, rows, take
 
 
 class Coulomb(Kind):
@@ -77,9 +77,6 @@ class Coulomb(Kind):
         if system.declared_friction(jn):  # a declared frictionloss is re-fitted as a nominal parameter
             return
         c, v = sc.force[target], sc.speed[target]
-        if f"coulomb_vel:{jn}" not in system.spec:
-            add_magnitude(add, "coulomb_friction", jn, f"coulomb:{jn}", c, 2.0)
-            return
         # the level, and the speed over which it builds up: friction that sticks harder than the
         # plant's default smoothing, or one that is soft (pre-sliding; MuJoCo's own frictionloss
         # is a soft constraint). The tuning half named 2 more friction cases with it fitted.
