@@ -109,28 +109,35 @@ def test_gaussian_update_does_not_depend_on_the_units():
     np.testing.assert_allclose([m10, s10], [10 * m1, 10 * s1], rtol=1e-4)
 
 
-@pytest.mark.parametrize("center", ["ema", "batch"])
-def test_failed_batch_moves_a_learned_gaussian_only_without_batch_centering(center):
+@pytest.mark.parametrize("center,max_kl", [("ema", 0.0), ("batch", 0.0), ("ema", 0.05)])
+def test_failed_batch_moves_a_learned_gaussian_only_without_batch_centering(center, max_kl):
     """All K episodes fail (J = 0) after a good running mean: centred by the running mean, every
     Jt is the same negative number, and M steps on samples from p_phi push their likelihood down
     -- the Gaussian runs away from its own samples (mean out, variance to nothing) with no
-    information in the returns; centred by the batch, Jt = 0 and it stays put."""
+    information in the returns; centred by the batch, Jt = 0 and it stays put. With the trust
+    region (``max_kl``) the run-away is at most ``max_kl`` nats per update."""
     from sim2real.dists import gaussian
 
     algo = lsdr_for("algo_options.dist=gaussian", "algo_options.alpha=0", f"algo_options.center={center}",
-                    "algo_options.sample_from=learned")
+                    "algo_options.sample_from=learned", f"algo_options.max_kl={max_kl}")
     phi0 = phi = algo.init_dist()
     opt = algo.tx.init(phi)
     Jt, _, _ = algo.standardise(jax.numpy.zeros(64), jax.numpy.asarray(500.0), jax.numpy.asarray(1e4),
                                 jax.numpy.asarray(True))
     step = jax.jit(algo.ascend)
     key = jax.random.PRNGKey(0)
+    moves = []
     for _ in range(5):
         key, k = jax.random.split(key)
+        prev = phi
         phi, opt = step(phi, opt, algo.sample(k, phi, 64), Jt)
+        moves.append(float(gaussian.kl(phi, prev)))
     if center == "batch":
         np.testing.assert_array_equal(np.asarray(Jt), 0.0)
         assert float(gaussian.kl(phi0, phi)) < 1e-6
+    elif max_kl > 0:
+        assert float(Jt[0]) < -1
+        assert 0.0 < max(moves) <= max_kl * (1 + 1e-4), moves
     else:
         assert float(Jt[0]) < -1
         assert float(gaussian.kl(phi0, phi)) > 5.0
@@ -138,3 +145,18 @@ def test_failed_batch_moves_a_learned_gaussian_only_without_batch_centering(cent
         # closed loop once ran to entropy -13.8 nats and trained every reset at one corner
         assert np.all((np.asarray(phi.mean) >= 0.0) & (np.asarray(phi.mean) <= 1.0))
         assert np.all(np.diagonal(np.asarray(gaussian.chol(phi))) >= 0.01 * (1 - 1e-5))
+
+
+def test_lsdr_draws_stay_in_the_prior_box():
+    """A Gaussian wider than its box is sampled inside the box: the box is the allowed support."""
+    from sim2real.dists import gaussian
+
+    algo = lsdr_for("algo_options.dist=gaussian")
+    z = np.asarray(algo.sample(jax.random.PRNGKey(0), gaussian.make([0.5], [3.0]), 2000))
+    assert z.min() >= 0.2 and z.max() <= 4.0
+    assert (z == 0.2).mean() > 0.3  # most of this Gaussian lies outside: those draws sit at the edges
+
+
+def test_bad_max_kl_is_refused():
+    with pytest.raises(ValueError, match="max_kl"):
+        lsdr_for("algo_options.max_kl=-1")

@@ -69,6 +69,12 @@ class LSDRConfig:
         objective: for samples from p_phi, M steps on the same samples then shrink p_phi onto
         them (c > 0) or blow it up (c < 0, e.g. once all K episodes fail); for samples from p(z)
         it adds ``-c * KL(p || p_phi)``, a random change of alpha that can turn it negative.
+      max_kl: the most p_phi may move in one distribution update, KL(new || old) in nats; a
+        longer step is shrunk towards the old distribution by halving (0: no limit). The M Adam
+        steps on one batch of K returns can otherwise carry p_phi across its box in one update:
+        on the pendulum's closed loop (4-D Gaussian, lr 0.05, M = 10) one batch moved the mean
+        to a corner and tripled every standard deviation, the policy was trained on that corner
+        and never recovered (evaluation return -400 -> -1400, LSDR's -1280 in the README).
       eval_horizon: steps of each evaluation episode (0: the env's episode length).
       policy_optimizer: ``ppo`` | ``epopt``.
       epopt: EPOpt settings when ``policy_optimizer == 'epopt'``.
@@ -91,6 +97,7 @@ class LSDRConfig:
     ema: float = 0.9
     min_std_fraction: float = 0.01
     center: str = "ema"
+    max_kl: float = 0.05
     eval_horizon: int = 0
     policy_optimizer: str = "ppo"
     epopt: epopt.EPOptConfig = epopt.EPOptConfig()
@@ -125,6 +132,8 @@ class LSDR(OuterLoop):
             raise ValueError(f"lsdr center '{cfg.center}' unknown: ema, batch")
         if cfg.policy_optimizer not in ("ppo", "epopt"):
             raise ValueError(f"lsdr policy_optimizer '{cfg.policy_optimizer}' unknown: ppo, epopt")
+        if not cfg.max_kl >= 0.0:
+            raise ValueError(f"lsdr max_kl={cfg.max_kl}: must be >= 0 (0: no limit)")
         if not 0.0 < cfg.min_std_fraction < 1.0:
             raise ValueError(f"lsdr min_std_fraction={cfg.min_std_fraction}: must be in (0, 1)")
         self.env, self.cfg, self.learn_dist = env, cfg, learn_dist
@@ -159,8 +168,10 @@ class LSDR(OuterLoop):
         return (z - self._low) / self._width if self._normalised else z
 
     def sample(self, key, phi, n=None):
-        """``[D]`` (or ``[n, D]``) draws of the sub-vector from p_phi, in physics units."""
-        return self.to_z(dists.sample(key, phi, n))
+        """``[D]`` (or ``[n, D]``) draws of the sub-vector from p_phi, in physics units, clipped to
+        the prior box: the box is the support the user allowed (a Gaussian's tails would otherwise
+        train on delays or masses nobody asked for)."""
+        return jnp.clip(self.to_z(dists.sample(key, phi, n)), self._low, self._high)
 
     def sampler(self, phi):
         return lambda key: self.space.expand(self.sample(key, phi))
@@ -261,7 +272,20 @@ class LSDR(OuterLoop):
             upd, opt = self.tx.update(g, opt, phi)
             return (self.project(optax.apply_updates(phi, upd)), opt), None
 
-        return jax.lax.scan(step, (phi, opt), None, length=cfg.grad_steps)[0]
+        new, opt = jax.lax.scan(step, (phi, opt), None, length=cfg.grad_steps)[0]
+        return self.limit(phi, new), opt
+
+    def limit(self, old, new):
+        """``new`` shrunk towards ``old`` (``old + b (new - old)``, b = 1, 1/2, ... 1/2048, else 0)
+        until KL(new || old) <= ``max_kl``. Both ends are inside the box (:meth:`project`), and
+        so is every point between them: the box and the std floor are convex in these parameters."""
+        if self.cfg.max_kl <= 0:
+            return new
+        betas = 0.5 ** jnp.arange(12.0)
+        mix = lambda b: jax.tree_util.tree_map(lambda o, n: o + b * (n - o), old, new)  # noqa: E731
+        kls = jax.vmap(lambda b: dists.kl(mix(b), old))(betas)
+        ok = kls <= self.cfg.max_kl
+        return mix(jnp.where(ok.any(), betas[jnp.argmax(ok)], 0.0))
 
     def project(self, phi):
         """A Gaussian back inside its box (``min_std_fraction``); binned ones are bounded already."""
