@@ -14,7 +14,10 @@ sites) and the CSV recordings.
 
 ``split``: a case with an even seed belongs to the tuning half, an odd seed to the test half.
 Cases come in pairs of neighbouring seeds (same system and effect, other magnitude and design),
-so both halves cover the same conditions.
+so both halves cover the same conditions. ``build_cases(extra=True)`` draws a second list by the
+same recipe from other seeds (1000 and up, split ``extra``): 144 more cases for tuning, made after
+the tuning half had been looked at many times, so a change can be checked on cases nothing was
+tuned on before it is kept. It is not part of the frozen list (its fingerprint is not the test's).
 """
 from __future__ import annotations
 
@@ -32,6 +35,7 @@ GENERATOR_VERSION = 2
 INTEGRATORS = ("Euler", "implicit", "implicitfast", "RK4")
 RATES = (100.0, 200.0, 500.0, 1000.0)
 EXCITATIONS = ("multisine", "chirp", "prbs", "steps", "pd")
+EXTRA_SEED = 1000  # first seed of the extra (tuning) list: build_cases(extra=True)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -331,6 +335,8 @@ class Case:
 
     @property
     def split(self) -> str:
+        if self.seed >= EXTRA_SEED:
+            return "extra"
         return "tuning" if self.seed % 2 == 0 else "test"
 
     @property
@@ -384,15 +390,17 @@ def _design(system: System, rng: np.random.Generator, seconds: float | None = No
                   str(rng.choice(exc)), noise, quant, bool(rng.uniform() < 0.5))
 
 
-def build_cases() -> list[Case]:
-    """The frozen case list. Deterministic: the same list on every machine."""
+def build_cases(extra: bool = False) -> list[Case]:
+    """The frozen case list (``extra``: the second list, same recipe, other seeds). Deterministic:
+    the same list on every machine."""
     S = systems()
-    rng = np.random.default_rng(20261123)
+    first = EXTRA_SEED if extra else 0
+    rng = np.random.default_rng(20261126 if extra else 20261123)
     cases: list[Case] = []
 
     def add_pair(system, kind, effects_pair, nominal_pair=((), ())):
         for k in range(2):
-            seed = len(cases)
+            seed = first + len(cases)
             r = np.random.default_rng(1000 + seed)
             cases.append(Case(seed, system, kind, effects_pair[k], nominal_pair[k], _design(S[system], r)))
 
@@ -420,7 +428,7 @@ def build_cases() -> list[Case]:
         sysm = S[name]
         pair = []
         for k in range(2):
-            r = np.random.default_rng(5000 + 2 * i + k)
+            r = np.random.default_rng(5000 + 2 * i + k + (10 * first if extra else 0))
             mods = []
             for lk in sysm.links:
                 if r.uniform() < 0.7:
