@@ -113,6 +113,11 @@ def test_noise_estimate_gaussian_and_quantised():
     np.testing.assert_allclose(noise_std(noisy), 1e-3, rtol=0.15)
     step = 2 * np.pi / 4096
     np.testing.assert_allclose(noise_std(np.round(0.05 * smooth / step) * step), step / np.sqrt(12), rtol=0.3)
+    # an encoder moving about a count per sample seldom stands still, and a local fit follows its
+    # staircase closely (0.3 of the step before); its changes are whole counts
+    ramp = np.round((0.77 * t + 0.05 * np.sin(2 * np.pi * 0.5 * t))[:, None] / step) * step
+    assert np.mean(np.diff(ramp[:, 0]) == 0) < 0.2
+    np.testing.assert_allclose(noise_std(ramp), step / np.sqrt(12), rtol=0.05)
     # more noise, wider smoothing window (on a motion fast enough that neither hits the widest)
     fast = np.stack([np.sin(2 * np.pi * 3 * t), 0.3 * np.cos(2 * np.pi * 3.9 * t)], -1)
     windows = [choose_window(x, noise_std(x), 0.002) for x in
