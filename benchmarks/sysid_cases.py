@@ -428,7 +428,7 @@ def build_cases(extra: bool = False) -> list[Case]:
         sysm = S[name]
         pair = []
         for k in range(2):
-            r = np.random.default_rng(5000 + 2 * i + k + (10 * first if extra else 0))
+            r = np.random.default_rng(5000 + 10 * first + 2 * i + k)
             mods = []
             for lk in sysm.links:
                 if r.uniform() < 0.7:

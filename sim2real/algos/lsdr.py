@@ -253,7 +253,7 @@ class LSDR(OuterLoop):
           z_sub: ``[K, D]`` evaluated contexts; Jt: ``[K]`` their standardised returns.
         """
         cfg = self.cfg
-        # learned samples may leave the box
+        # ``sample`` draws inside the box already; a caller's own contexts may not be
         z_in = jnp.clip(z_sub, self._low, self._high - 1e-6 * self._width)
         x_in, (x_lo, x_hi) = self.to_x(z_in), self._box()
 

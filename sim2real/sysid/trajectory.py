@@ -94,14 +94,15 @@ def noise_std(x: np.ndarray) -> np.ndarray:
     mad = 1.4826 * np.median(np.abs(res - np.median(res, 0)), 0) / np.sqrt(1 - 7 / 21)
     out = np.empty(x.shape[1])
     for k in range(x.shape[1]):
-        steps = np.abs(np.diff(x[:, k]))
-        steps = steps[steps > 0]
+        d = np.diff(x[:, k])
+        steps = np.abs(d[d != 0])
         q = 0.0
         if len(steps):
-            r = steps / np.min(steps)
+            smallest = np.min(steps)
+            r = steps / smallest
             on_grid = np.mean(np.abs(r - np.round(r)) < 1e-3) > 0.99
-            if on_grid or np.mean(np.diff(x[:, k]) == 0) > 0.2:  # a quantised signal
-                q = float(np.min(steps)) / np.sqrt(12)
+            if on_grid or np.mean(d == 0) > 0.2:  # a quantised signal
+                q = float(smallest) / np.sqrt(12)
         out[k] = max(mad[k], q, 1e-12 * (np.ptp(x[:, k]) + 1e-12))
     return out
 
