@@ -165,6 +165,8 @@ CASES = [
     ("negative_finer", "diagnose", D + ["recordings=[a.csv]", "finer=-1"], {}, "finer=-1: must be >= 0"),
     ("negative_heldout_gain", "diagnose", D + ["recordings=[a.csv]", "heldout_gain=-0.1"], {},
      "heldout_gain=-0.1: must be a finite number >= 0"),
+    ("nan_energy_explained", "diagnose", D + ["recordings=[a.csv]", "energy_explained=nan"], {},
+     "energy_explained=nan: must be a finite number >= 0"),
     ("unknown_effect", "diagnose", D + ["recordings=[a.csv]", "effects=[none,fricton]"], {}, "unknown effect(s) ['fricton']"),
     ("not_key_value", "diagnose", ["robot.xml"], {}, "argument 'robot.xml' is not of the form key=value"),
     # ---- training configs -----------------------------------------------------------------------------------

@@ -313,6 +313,17 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
     B += [("h2", "Steps"), ("table", ["model", "training objective", "validation objective", "held-out NRMSE", "kept"],
                              [[s["model"], f"{s['objective']:.4g}", f"{s['validation']:.4g}", f"{s['heldout_nrmse']:.4g}",
                                "yes" if s["kept"] else "no"] for s in d["steps"]])]
+    e = d.get("energy") or {}
+    if e.get("candidates"):
+        verdict = (f"named: `{e['named']}`" if e.get("named") else e.get("rejected", "nothing explains "
+                   f"{100 * e['explained_needed']:.0f}% of the missing work on every check recording"))
+        B += [("h2", "Work over whole recordings (slow dissipation)"),
+              ("p", "The work each dissipation would do along the measured motion, against the work the model "
+                    f"misses (fraction explained per check recording); {verdict}."),
+              ("table", ["effect", "target", "size", "std", "explained", "held-out NRMSE"],
+               [[c["effect"], c["target"], f"{c['value']:.4g} {c['unit']}", _fmt(c["std"]),
+                 ", ".join(f"{x:.2f}" for x in c["explained"]),
+                 f"{c['heldout_nrmse']:.4g}" if c.get("heldout_nrmse") is not None else ""] for c in e["candidates"]])]
     B += [("h2", "Nominal parameters re-fitted"),
           ("table", ["parameter", "nominal", "fitted", "std", "95% interval", "unit"],
            [[f"`{n}`", f"{v['nominal']:.6g}", f"{v['fitted']:.6g}", _fmt(v["std"]), ci(v["fitted"], v["std"]), v["unit"]]

@@ -64,6 +64,14 @@ class Trajectory:
     def __len__(self) -> int:
         return len(self.time)
 
+    def part(self, start: int, stop: int) -> "Trajectory":
+        """Samples ``start:stop`` (time still counted from the recording's first sample)."""
+        s = slice(start, stop)
+        cut = lambda x: None if x is None else x[s]  # noqa: E731
+        return dataclasses.replace(self, time=self.time[s], q=self.q[s], v=self.v[s], a=self.a[s],
+                                   ctrl=self.ctrl[s], qfrc=self.qfrc[s], force=cut(self.force),
+                                   qvel=cut(self.qvel), sigma_v_t=cut(self.sigma_v_t))
+
 
 # a signal's weight in the fits is 1 / (noise^2 + (SPREAD_FLOOR * its std)^2): a signal measured
 # with almost no noise still does not outweigh every other one (``signal_scale``)
