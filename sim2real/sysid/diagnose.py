@@ -427,7 +427,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         dropped = steps[-1].effects[len(chosen.effects):]
         bar.step(0, text="weighing the work done over whole recordings")
         base_kept = not (keep == 0 and refit_worse)
-        energy_rows, grown = _energy_step(cfg, system, sel, sh, fitter, chosen, chosen.z if base_kept else z0, trajs,
+        energy_rows, grown = _energy_step(cfg, system, sel, sh, fitter, chosen, chosen.z if base_kept else z0, base_kept, trajs,
                                           len(train), held, check_tiles, step_ho[keep] if base_kept else nominal_ho)
         if grown is not None:  # a dissipation found by the energy balance extends the kept model
             M2, nr2 = grown
@@ -455,9 +455,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         bar.close()
 
 
-def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, trajs, n_train, held, check_tiles, ho_base):
+def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_train, held, check_tiles, ho_base):
     """The energy balance on top of the kept model (``energy.scan``; ``z_base``: its physics, the
-    nominal one where the re-fit was not kept; ``ho_base``: its held-out NRMSE): ``(what it found,
+    nominal one where the re-fit was not kept, ``refit`` False; ``ho_base``: its held-out NRMSE): ``(what it found,
     for the report; None or (the model with the best dissipation added, its held-out NRMSE and
     predictions))``."""
     info = {"explained_needed": cfg.energy_explained, "candidates": []}
@@ -495,9 +495,11 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, trajs, n_train, h
         z2 = np.array(z_base, float).copy()
         z2[system.spec.index(c.params[0])] = f.value
         # the model's other parameters re-fitted around it (held at its energy value: the short
-        # predictions cannot size it), as they were fitted without it
-        names = [n for n in chosen.params if n != c.params[0]]
-        res = fitter.fit(z2, chosen.result.v0, names, sel.fit_tiles, iters=sel.cfg.iters) if names else chosen.result
+        # predictions cannot size it) where the kept model's were re-fitted; where the nominal
+        # parameters were kept (their re-fit predicted held-out data worse), they stay
+        names = [n for n in chosen.params if n != c.params[0]] if refit else []
+        res = (fitter.fit(z2, chosen.result.v0, names, sel.fit_tiles, iters=sel.cfg.iters) if names
+               else dataclasses.replace(chosen.result, z=z2))
         res = dataclasses.replace(res, std={**res.std, c.params[0]: f.std})
         models.append(Model(list(chosen.effects) + [c], res, None, names + [c.params[0]]))
     checked = _nrmse(sh, fitter, [M.z for M in models], check_tiles)
