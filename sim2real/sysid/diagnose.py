@@ -78,11 +78,13 @@ class DiagnoseConfig:
         list of ``benchmarks/sysid_cases.py``), 178 true effects were kept and none of them above
         0.99 of the error before it but one that came after two false ones, while four false
         ones sat at 0.999-1.15 (a hinge stiffness on cart-poles, a backlash, a lag).
-      energy_explained: on a model without actuators (a free swing, a free decay), a dissipation
-        the short predictions cannot see (a joint damping or Coulomb friction) is named after the
-        selection when the work it does over whole recordings explains this fraction of the work
-        the model misses in every check recording (``energy.scan``) and it does not predict
-        held-out data worse (> 1: never).
+      energy_explained: where the work put in is known (no actuator: a free swing or decay; or
+        torque-driven joints, force = gain x command), a dissipation the short predictions cannot
+        see (a joint damping or Coulomb friction) is named after the selection when the work it
+        does over whole recordings explains this fraction of the work the model misses in every
+        check recording (``energy.scan``), and it predicts neither the held-out data worse nor
+        the validation segments clearly worse (> 1: never). (Not ``heldout_gain`` better: a
+        dissipation too slow for the predictions changes them little by what it is.)
       tie_tolerance: fitted alternatives that passed and whose validation error is within this
         fraction of the selected effect's (or lower) are reported as indistinguishable from it.
       plots: draw the figures of the report.
@@ -464,12 +466,19 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_t
     if cfg.energy_explained > 1:
         info["skipped"] = "energy_explained > 1"
         return info, None
-    # Only where no actuator puts work in: the work an actuator does is its law's (a servo's gains,
-    # a drive's constant, a command path), held at nominal, and any error of it drifts like a
-    # dissipation. On the independent benchmark's tuning lists (every case actuated) the balance
-    # named a false friction on parameter-only cases, and a true one once in 216.
-    if system.mj.nu:
-        info["skipped"] = "the model has actuators (the balance is used on free motion only)"
+    # Only where the work put in is known: no actuator, or force actuators whose force is the
+    # command times a gain (a torque-driven joint). A servo's work is its law's (gains, bias),
+    # held at nominal, and any error of it drifts like a dissipation; a command path (delay,
+    # lag, backlash, activations) changes the command the joints receive. (Both tuning lists of
+    # the independent benchmark, 216 cases: with servos let in, 4 false frictions named, one on
+    # a parameter-only case; as here, one true friction and no false one.)
+    m = system.mj
+    servo = [system.actuators[a] for a in range(m.nu) if m.actuator_biastype[a] or m.actuator_dyntype[a]
+             or m.actuator_gaintype[a]]
+    path = [c.label for c in chosen.effects if c.effect in ("action_delay", "motor_lag", "backlash")]
+    if servo or path:
+        info["skipped"] = (f"{', '.join(servo)}: the actuator's own law does work the balance cannot check" if servo
+                           else f"{', '.join(path)} changes the command the joints receive")
         return info, None
     named = {c.label for c in chosen.effects}
     cands = [c for c in sel.cands if c.effect in energy.DISSIPATIVE and c.label not in named]
@@ -479,7 +488,14 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_t
         cut = [int(len(tr) * (1 - cfg.val_fraction)) for tr in trajs[:n_train]]
         train = [tr.part(0, k) for tr, k in zip(trajs, cut)]
         check = [tr.part(k, len(tr)) for tr, k in zip(trajs, cut)]
-    found = energy.scan(system, z_base, train, check, cands, system.spec)
+    # the model's own dissipation (a declared damping or friction loss) is re-sized beside each
+    # candidate, which must explain what re-sizing it does not (masses are not: their work is
+    # the energy's change, bounded, and beside a sensor glitch a free mass took it all, DFKI)
+    own = {n: max(abs(float(system.spec[n].default)), 1e-3) for n in system.nominal
+           if n.startswith(("damping:", "coulomb:"))}
+    found, dropped = energy.scan(system, z_base, train, check, cands, system.spec, nuisance=own)
+    info["glitch_seconds"] = {f"{tr.name}{' (tail)' if not held and k >= n_train else ''}": round(x, 3)
+                              for k, (tr, x) in enumerate(zip(train + check, dropped))}
     info["candidates"] = [{"effect": f.candidate.effect, "target": f.candidate.target, "value": f.value, "std": f.std,
                            "unit": system.spec[f.candidate.params[0]].unit,
                            "explained": f.explained, "train_explained": f.train_explained} for f in found]
@@ -508,16 +524,32 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_t
     for f, ho in zip(passing, scores):
         next(r for r in info["candidates"] if r["effect"] == f.candidate.effect
              and r["target"] == f.candidate.target)["heldout_nrmse"] = ho
-    i = int(np.argmin(scores))
-    info.update(heldout_before=ho_base, heldout_after=scores[i])
-    if scores[i] > ho_base:
-        info["rejected"] = (f"the dissipations that explain the missing work ({', '.join(f.candidate.label for f in passing)})"
-                            f" predict held-out data worse (best: {scores[i]:.4g} against {ho_base:.4g})")
-        return info, None
-    info["named"] = passing[i].candidate.label
-    info["alternatives"] = [f.candidate.label for k, f in enumerate(passing) if k != i]
-    sel.validate([models[i]])
-    return info, (models[i], checked[i])
+    base = Model(list(chosen.effects), dataclasses.replace(chosen.result, z=np.asarray(z_base, float)), None,
+                 list(chosen.params))
+    sel.validate(models + [base])
+    order = np.argsort(scores)
+    info.update(heldout_before=ho_base, heldout_after=float(scores[order[0]]))
+    for i in order:
+        # not worse, rather than ``heldout_gain`` better: a dissipation too slow for the
+        # predictions changes them little by what it is (a free double pendulum's true shoulder
+        # damping: 0.6%); its evidence is the work it explains on the check recordings
+        if scores[i] > ho_base:
+            break
+        ratio, t = sel.judge(base, models[i])
+        info["candidates"][[r["effect"] + "@" + r["target"] for r in info["candidates"]].index(
+            passing[i].candidate.label)].update(validation_ratio=ratio, t=t)
+        # nor clearly worse on the validation segments (short predictions of the training
+        # recordings' tails; DFKI, SAC run: a friction that the work asks for made them 2.5x worse)
+        if ratio > 1 and t <= -sel.cfg.min_t:
+            continue
+        info["named"] = passing[i].candidate.label
+        info["heldout_after"] = float(scores[i])
+        info["alternatives"] = [f.candidate.label for k, f in enumerate(passing) if k != i]
+        return info, (models[i], checked[i])
+    info["rejected"] = (f"the dissipations that explain the missing work ({', '.join(f.candidate.label for f in passing)})"
+                        f" predict held-out data worse (best: {scores[order[0]]:.4g} against {ho_base:.4g}) or the "
+                        "validation segments clearly worse")
+    return info, None
 
 
 def _model_for_loading(path: str) -> mujoco.MjModel:
@@ -584,7 +616,9 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         if trial is not None and trial.note:
             row["note"] = trial.note
         if energy_rows and energy_rows.get("named") == c.label:
-            f = energy_rows["candidates"][0]
+            f = next(r for r in energy_rows["candidates"] if f"{r['effect']}@{r['target']}" == c.label)
+            # judged against the model it extends (the nominal parameters where their re-fit was not kept)
+            row.update(validation_ratio=f["validation_ratio"], t=f["t"])
             row["note"] = ("found by the energy balance over whole recordings (too slow for the predictions to "
                            f"show): it explains {100 * min(f['explained']):.0f}% or more of the work the model "
                            "misses on every check recording")

@@ -319,7 +319,10 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
                    f"{100 * e['explained_needed']:.0f}% of the missing work on every check recording"))
         B += [("h2", "Work over whole recordings (slow dissipation)"),
               ("p", "The work each dissipation would do along the measured motion, against the work the model "
-                    f"misses (fraction explained per check recording); {verdict}."),
+                    f"misses (fraction explained per check recording); {verdict}."
+                    + (" Left out as glitches (0.1 s blocks no dissipation comes near): " + ", ".join(
+                        f"{k} {v:g} s" for k, v in e["glitch_seconds"].items() if v) + "."
+                       if any((e.get("glitch_seconds") or {}).values()) else "")),
               ("table", ["effect", "target", "size", "std", "explained", "held-out NRMSE"],
                [[c["effect"], c["target"], f"{c['value']:.4g} {c['unit']}", _fmt(c["std"]),
                  ", ".join(f"{x:.2f}" for x in c["explained"]),
