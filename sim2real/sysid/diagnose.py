@@ -499,6 +499,9 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_t
     info["candidates"] = [{"effect": f.candidate.effect, "target": f.candidate.target, "value": f.value, "std": f.std,
                            "unit": system.spec[f.candidate.params[0]].unit,
                            "explained": f.explained, "train_explained": f.train_explained} for f in found]
+    if found:  # the figure's curves: the best candidate's, or the named one's (below)
+        info["curves"] = {"label": found[0].candidate.label, "recordings": [tr.name for tr in check],
+                          "per_recording": found[0].curves}
     passing = [f for f in found if f.worst >= cfg.energy_explained]
     if not passing:
         return info, None
@@ -543,6 +546,8 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_t
         if ratio > 1 and t <= -sel.cfg.min_t:
             continue
         info["named"] = passing[i].candidate.label
+        info["curves"] = {"label": passing[i].candidate.label, "recordings": [tr.name for tr in check],
+                          "per_recording": passing[i].curves}
         info["heldout_after"] = float(scores[i])
         info["alternatives"] = [f.candidate.label for k, f in enumerate(passing) if k != i]
         return info, (models[i], checked[i])

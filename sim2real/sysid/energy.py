@@ -40,6 +40,9 @@ class Finding:
         training fit's residual, samples taken as correlated over ``window`` seconds).
       explained: ``[R]`` fraction of ``W``'s variance its drift explains on each check recording.
       train_explained: the same on the training recordings (the fit's own).
+      curves: per check recording, ``{"t", "missing", "explained"}`` (s, J; at most 400 points):
+        the work the model misses and what the fit gives (the model's own parameters re-sized
+        and the candidate), each from the recording's mean, for the report's figure.
     """
 
     candidate: object
@@ -47,6 +50,7 @@ class Finding:
     std: float
     explained: list
     train_explained: list
+    curves: list = dataclasses.field(default_factory=list)
 
     @property
     def worst(self) -> float:
@@ -209,6 +213,12 @@ def scan(system, z, train, check, candidates, spec, *, nuisance=(), max_rows: in
             std = float(np.sqrt(max(cov[-1, -1], 0.0)))
         except np.linalg.LinAlgError:
             std = float("inf")
-        out.append(Finding(c, float(z[i] + b[-1]), std, explained(sse_ck, sse0_ck), explained(sse_tr, sse0_tr)))
+        curves = []
+        for tk, w, x in zip(t_ck, W_ck, X_ck):
+            k = np.unique(np.linspace(0, len(tk) - 1, min(400, len(tk))).astype(int))
+            curves.append({"t": tk[k].tolist(), "missing": (w - w.mean())[k].tolist(),
+                           "explained": ((x - x.mean(0)) @ b)[k].tolist()})
+        out.append(Finding(c, float(z[i] + b[-1]), std, explained(sse_ck, sse0_ck), explained(sse_tr, sse0_tr),
+                           curves))
     out.sort(key=lambda f: -f.worst)
     return out, dropped

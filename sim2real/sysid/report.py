@@ -223,6 +223,24 @@ def heldout_animation(path, system, sh, tiles, pred_b, pred_a, traj_index, secon
     return f"{tr.name}: {n} segments of {sh.H * tr.dt:.3g} s, real time"
 
 
+def energy_plot(path: str, curves: dict) -> None:
+    """The work the model misses along each check recording (J, from its mean) beside the work of
+    the dissipation fitted to it (``energy.scan``): a slow loss shows as a drift that grows with time."""
+    per = curves["per_recording"][:3]
+    fig, axes = plt.subplots(len(per), 1, figsize=(8, 2.6 * len(per)), squeeze=False)
+    for ax, name, c in zip(axes[:, 0], curves["recordings"], per):
+        ax.plot(c["t"], c["missing"], color="k", lw=1.2, label="work the model misses")
+        ax.plot(c["t"], c["explained"], color="tab:red", lw=1.2, ls="--", label=f"{curves['label']} (fitted)")
+        ax.set_title(name, fontsize=9)
+        ax.set_ylabel("work (J)")
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time (s)")
+    axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_rows,
             animation: bool = True) -> dict[str, str]:
     from sim2real.sysid.diagnose import _signal_names
@@ -247,6 +265,10 @@ def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_ro
             images[f"Sim vs real, animated ({window})"] = "heldout.gif"
         except Exception as e:  # noqa: BLE001  (no OpenGL here: the report goes on without it)
             d["notes"].append(f"heldout.gif was not drawn: {type(e).__name__}: {str(e).splitlines()[0]}")
+    curves = (d.get("energy") or {}).get("curves")
+    if curves:
+        energy_plot(os.path.join(out, "energy.png"), curves)
+        images["Work over whole recordings"] = "energy.png"
     steps_plot(os.path.join(out, "steps.png"), d["steps"])
     images["Forward selection"] = "steps.png"
     if d["effects"]:
