@@ -429,8 +429,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         dropped = steps[-1].effects[len(chosen.effects):]
         bar.step(0, text="weighing the work done over whole recordings")
         base_kept = not (keep == 0 and refit_worse)
-        energy_rows, grown = _energy_step(cfg, system, sel, sh, fitter, chosen, chosen.z if base_kept else z0, base_kept, trajs,
-                                          len(train), held, check_tiles, step_ho[keep] if base_kept else nominal_ho)
+        energy_rows, grown = _energy_step(cfg, system, sel, sh, fitter, chosen, base_kept, trajs, len(train), held,
+                                          check_tiles, step_ho[keep] if base_kept else nominal_ho)
         if grown is not None:  # a dissipation found by the energy balance extends the kept model
             M2, nr2 = grown
             steps = steps[: keep + 1] + [M2]
@@ -457,11 +457,12 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         bar.close()
 
 
-def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_train, held, check_tiles, ho_base):
-    """The energy balance on top of the kept model (``energy.scan``; ``z_base``: its physics, the
-    nominal one where the re-fit was not kept, ``refit`` False; ``ho_base``: its held-out NRMSE): ``(what it found,
-    for the report; None or (the model with the best dissipation added, its held-out NRMSE and
-    predictions))``."""
+def _energy_step(cfg, system, sel, sh, fitter, chosen, refit, trajs, n_train, held, check_tiles, ho_base):
+    """The energy balance on top of the kept model (``energy.scan``; ``refit``: its re-fitted
+    parameters were kept, else the nominal ones are its physics; ``ho_base``: its held-out NRMSE):
+    ``(what it found, for the report; None or (the model with the best dissipation added, its
+    held-out NRMSE and predictions))``."""
+    z_base = np.asarray(chosen.z if refit else system.spec.default, float)
     info = {"explained_needed": cfg.energy_explained, "candidates": []}
     if cfg.energy_explained > 1:
         info["skipped"] = "energy_explained > 1"
@@ -502,16 +503,17 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_t
     if found:  # the figure's curves: the best candidate's, or the named one's (below)
         info["curves"] = {"label": found[0].candidate.label, "recordings": [tr.name for tr in check],
                           "per_recording": found[0].curves}
-    passing = [f for f in found if f.worst >= cfg.energy_explained]
+    passing = [f for f in found if f.worst >= cfg.energy_explained][:4]
+    row = {f"{r['effect']}@{r['target']}": r for r in info["candidates"]}
     if not passing:
         return info, None
     # the balance shows that work is missing; where and in what form, the candidates that explain it
     # may not tell apart (a decaying motion makes every joint's losses grow alike): among them, the
     # one whose short predictions of the held-out data are best, and not worse than without it
     models = []
-    for f in passing[:4]:
+    for f in passing:
         c = f.candidate
-        z2 = np.array(z_base, float).copy()
+        z2 = z_base.copy()
         z2[system.spec.index(c.params[0])] = f.value
         # the model's other parameters re-fitted around it (held at its energy value: the short
         # predictions cannot size it) where the kept model's were re-fitted; where the nominal
@@ -523,12 +525,9 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_t
         models.append(Model(list(chosen.effects) + [c], res, None, names + [c.params[0]]))
     checked = _nrmse(sh, fitter, [M.z for M in models], check_tiles)
     scores = [float(np.mean(list(nr.values()))) for nr, _ in checked]
-    passing = passing[:4]
     for f, ho in zip(passing, scores):
-        next(r for r in info["candidates"] if r["effect"] == f.candidate.effect
-             and r["target"] == f.candidate.target)["heldout_nrmse"] = ho
-    base = Model(list(chosen.effects), dataclasses.replace(chosen.result, z=np.asarray(z_base, float)), None,
-                 list(chosen.params))
+        row[f.candidate.label]["heldout_nrmse"] = ho
+    base = Model(list(chosen.effects), dataclasses.replace(chosen.result, z=z_base), None, list(chosen.params))
     sel.validate(models + [base])
     order = np.argsort(scores)
     info.update(heldout_before=ho_base, heldout_after=float(scores[order[0]]))
@@ -539,8 +538,7 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, z_base, refit, trajs, n_t
         if scores[i] > ho_base:
             break
         ratio, t = sel.judge(base, models[i])
-        info["candidates"][[r["effect"] + "@" + r["target"] for r in info["candidates"]].index(
-            passing[i].candidate.label)].update(validation_ratio=ratio, t=t)
+        row[passing[i].candidate.label].update(validation_ratio=ratio, t=t)
         # nor clearly worse on the validation segments (short predictions of the training
         # recordings' tails; DFKI, SAC run: a friction that the work asks for made them 2.5x worse)
         if ratio > 1 and t <= -sel.cfg.min_t:

@@ -14,8 +14,8 @@ inertial and gravity terms of ``r . v`` telescope to the change of the model's e
 the noise of twice-differentiated positions does not accumulate over the integral, and a
 dissipation shows as a drift that grows with time. Each candidate's size ``c >= 0`` is fitted
 on the training recordings; it is judged on the check recordings (held-out ones, else the
-training recordings' validation tails), where its drift must explain ``min_explained`` of
-``W``'s variance in every one.
+training recordings' validation tails), where its drift must explain a fraction of ``W``'s
+variance in every one (``DiagnoseConfig.energy_explained``).
 """
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ class Finding:
     Attributes:
       candidate: the ``candidates.Candidate``.
       value: its fitted size (its first parameter's units); ``std``: standard error (from the
-        training fit's residual, samples taken as correlated over ``window`` seconds).
+        training fit's residual, samples taken as correlated over a tenth of a recording).
       explained: ``[R]`` fraction of ``W``'s variance its drift explains on each check recording.
       train_explained: the same on the training recordings (the fit's own).
       curves: per check recording, ``{"t", "missing", "explained"}`` (s, J; at most 400 points):
@@ -60,9 +60,9 @@ class Finding:
 def _work(system, z, trajs, stride: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per trajectory: ``(t [N], r [N, nv], v [N, nv])`` on every ``stride``-th sample away from
     the smoothing edges."""
-    idx = [np.arange(tr.window, len(tr) - tr.window, stride) for tr in trajs]
     out = []
-    for tr, ix in zip(trajs, idx):
+    for tr in trajs:
+        ix = np.arange(tr.window, len(tr) - tr.window, stride)
         res = invdyn.residual(system, z, [tr], [ix])
         out.append((tr.time[ix], res["r"], res["v"]))
     return out
@@ -92,6 +92,16 @@ def _lsq(X: list, W: list, nonneg_last: bool):
 
 def _sse(X: list, W: list, b) -> list:
     return [float(np.sum(((w - w.mean()) - (x - x.mean(0)) @ b) ** 2)) for x, w in zip(X, W)]
+
+
+def _explained(sse: list, sse0: list) -> list:
+    """Per recording: the fraction of the baseline's squared residual ``sse0`` a fit removes."""
+    return [float(1.0 - a / max(o, 1e-300)) for a, o in zip(sse, sse0)]
+
+
+REJECT = 8.0
+"""A block of 0.1 s is dropped from the balance when its missing work departs this many robust
+standard deviations from what the regressors give (a glitch, not a dissipation)."""
 
 
 def _glitches(t, P, v, coef, block: int, scale=None):
@@ -129,17 +139,12 @@ def _glitches(t, P, v, coef, block: int, scale=None):
     return out, scale
 
 
-REJECT = 8.0
-"""A block of 0.1 s is dropped from the balance when its missing work departs this many robust
-standard deviations from what the regressors give (a glitch, not a dissipation)."""
-
-
 def scan(system, z, train, check, candidates, spec, *, nuisance=(), max_rows: int = 12000):
     """Judge every dissipative candidate of ``candidates`` on top of model ``z``.
 
     ``train``, ``check``: trajectories (``check`` may be parts of ``train``'s recordings);
     ``spec``: the system's parameter spec (the candidates' parameters' indices and neutral values);
-    ``nuisance``: ``{name: unit}`` of the model's own parameters (a declared damping, the masses),
+    ``nuisance``: ``{name: unit}`` of the model's own parameters (a declared damping or friction loss),
     re-sized either way beside every candidate: a candidate must explain what re-sizing them
     does not. Returns ``(findings, best -- largest worst-recording ``explained`` -- first;
     seconds dropped as glitches per recording, training then check)``.
@@ -179,6 +184,7 @@ def scan(system, z, train, check, candidates, spec, *, nuisance=(), max_rows: in
         coef = np.linalg.lstsq(A[kb], y[kb], rcond=None)[0]
     keep_ck, _ = _glitches(t_ck, P_ck, v_ck, coef, block, scale)
     dropped = [float(np.sum(np.gradient(tk)[~k])) for tk, k in zip(t_tr + t_ck, keep_tr + keep_ck)]
+
     def cum(ts, Ps, keeps, cols):
         """Per recording: ``[N, len(cols)]`` integrals of the integrand columns ``cols``."""
         return [np.stack([_cumulative(tk, p[:, j], k) for j in cols], 1) if len(cols) else np.zeros((len(tk), 0))
@@ -203,7 +209,6 @@ def scan(system, z, train, check, candidates, spec, *, nuisance=(), max_rows: in
         lo, hi = c.search[0]
         b[-1] = float(np.clip(z[i] + b[-1], lo, hi) - z[i])
         sse_tr, sse_ck = _sse(X_tr, W_tr, b), _sse(X_ck, W_ck, b)
-        explained = lambda s1, s0: [float(1.0 - a / max(o, 1e-300)) for a, o in zip(s1, s0)]  # noqa: E731
         # standard error: the residual's variance, with samples correlated over a tenth of a
         # recording (a drift's noise is smooth), so the effective count is small
         res = y_ - A_ @ b
@@ -218,7 +223,7 @@ def scan(system, z, train, check, candidates, spec, *, nuisance=(), max_rows: in
             k = np.unique(np.linspace(0, len(tk) - 1, min(400, len(tk))).astype(int))
             curves.append({"t": tk[k].tolist(), "missing": (w - w.mean())[k].tolist(),
                            "explained": ((x - x.mean(0)) @ b)[k].tolist()})
-        out.append(Finding(c, float(z[i] + b[-1]), std, explained(sse_ck, sse0_ck), explained(sse_tr, sse0_tr),
+        out.append(Finding(c, float(z[i] + b[-1]), std, _explained(sse_ck, sse0_ck), _explained(sse_tr, sse0_tr),
                            curves))
     out.sort(key=lambda f: -f.worst)
     return out, dropped
