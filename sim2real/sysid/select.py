@@ -106,6 +106,10 @@ class SelectConfig:
         (``step_level``, measured per diagnosis by ``diagnose.discretization_level``). A model
         whose remaining misfit the step's own error could explain has nothing left that an
         effect could be trusted with: a damping, a lag would absorb the integrator's error.
+        Twice, not once: ``step_level`` is measured from noisy measured states and so
+        understates what the step does to a fitted prediction (a servo pendulum at 1 ms whose
+        whole misfit, 1.27 times its measured level, a damping took up); between once and twice
+        the ``finer`` check decides (``tuning.md`` step 24).
       strong: a validation ratio at or below this passes whatever the misfit level.
       finer: a candidate that passes every test but ``floor_step`` is judged again, the model it
         extends and it, with a physics step this many times shorter (the same parameters,
@@ -124,7 +128,7 @@ class SelectConfig:
     max_effects: int = 3
     min_score: float = 0.01
     iters: int = 6
-    floor_step: float = 1.0
+    floor_step: float = 2.0
     finer: int = 4
 
 
