@@ -115,7 +115,7 @@ def run_case(case: sysid_cases.Case, work: str, settings: dict | None = None) ->
     return row
 
 
-def summarise(rows: list[dict], title: str) -> str:
+def summarise(rows: list[dict], title: str, jobs: int = 1) -> str:
     def pct(a, b):
         return f"{a}/{b} ({100 * a / b:.0f}%)" if b else "0/0"
 
@@ -133,7 +133,7 @@ def summarise(rows: list[dict], title: str) -> str:
          f"- held-out error never worse than the nominal model's: "
          f"**{pct(sum(r.get('never_worse') is True for r in rows), len(rows))}**",
          f"- named effects' parameters within 25% of the truth: **{pct(sum(r['params_within_25'] is True for r in named_rows), len(named_rows))}**",
-         f"- seconds per case (2 cores): median {np.median([r['seconds'] for r in rows]):.1f}, "
+         f"- seconds per case ({os.cpu_count()} CPU cores, {jobs} case(s) at a time): median {np.median([r['seconds'] for r in rows]):.1f}, "
          f"max {np.max([r['seconds'] for r in rows]):.1f}; 8 s recordings: median "
          f"{np.median([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}, max "
          f"{np.max([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}",
@@ -203,7 +203,8 @@ def main(args: Settings):
         w = csv.DictWriter(f, keys)
         w.writeheader()
         w.writerows(rows)
-    text = summarise(rows, f"{args.split} split ({len(rows)} cases{', only ' + args.only if args.only else ''})")
+    text = summarise(rows, f"{args.split} split ({len(rows)} cases{', only ' + args.only if args.only else ''})",
+                     args.jobs)
     with open(os.path.join(out, "summary.md"), "w") as f:
         f.write(text)
     print(text)

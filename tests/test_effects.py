@@ -36,11 +36,13 @@ def test_effects_off_is_bitwise_neutral(name):
     qvel = jnp.asarray(rng.normal(size=env.mj_model.nv), jnp.float32)
     es = fx.init_state()
     n = env.config.frame_skip
+    # (the backlash stage limits the command to its range, taking over MuJoCo's clamp: its own)
+    limited = np.clip(np.asarray(ctrl), env.ctrl_low, env.ctrl_high)
     for _ in range(3):  # with a filled delay buffer too
         es = fx.push(es, ctrl)
         for j in range(n):
             u, es = fx.actuate(z, es, j, n, qpos, env.dt / n)
-            np.testing.assert_array_equal(np.asarray(u), np.asarray(ctrl))
+            np.testing.assert_array_equal(np.asarray(u), limited)
     _, extra = fx.velocity_damping(z, qvel)
     assert np.all(np.asarray(extra) == 0.0)
     np.testing.assert_array_equal(np.asarray(fx.sense(z, qpos, KEY)), np.asarray(qpos))
@@ -255,7 +257,8 @@ def test_backlash_motor_side_crosses_the_band_then_drives_the_joint():
     bk = Backlash()
     data = {"rows": np.array([0]), "inertia_rows": np.array([1]), "stiffness_rows": np.array([2]),
             "inertia": np.array([1e-3]), "gain_rows": np.array([-1]), "gain": np.array([1.0]),
-            "k_per_gain": np.array([0.0]), "damp": np.array([0.0]), "qpos": np.array([0]), "dof": np.array([0])}
+            "k_per_gain": np.array([0.0]), "damp": np.array([0.0]), "qpos": np.array([0]), "dof": np.array([0]),
+            "ctrl_lo": np.array([-np.inf]), "ctrl_hi": np.array([np.inf])}
     I, J, tau, h = 0.01, 1e-3, 0.1, 1e-4
 
     def run(k, steps):
@@ -281,3 +284,37 @@ def test_backlash_motor_side_crosses_the_band_then_drives_the_joint():
     assert (compliant[:cross, 0] == 0.0).all()
     settled = compliant[-500:, 2] - 0.01
     assert settled.mean() == pytest.approx(tau * I / ((I + J) * 10.0), rel=0.1)
+
+
+def test_backlash_impact_reaches_the_joint_past_the_command_range():
+    """MuJoCo clamps a command to its ``ctrlrange``; the backlash stage's output at an impact is not
+    a motor command but the momentum the motor side hands over, and must reach the joint whole.
+    Pendulum motor (gear 1, range +-2 N m), a 0.3 rad rigid band, the motor at its limit: at the
+    impact the joint gets far more than 2 N m for a sub-step. A command past the range drives the
+    motor side as the limit does (the same crossing), and with the band off is limited to 2 N m."""
+    from sim2real.physics import stepper
+
+    env = env_for("pendulum")
+    h = env.dt / env.config.frame_skip
+
+    @jax.jit
+    def forces(z, u):
+        z = jnp.asarray(z)
+        model = env.physics.apply(z)
+        d0 = env.reset(KEY, z).data.replace(qpos=jnp.zeros(1), qvel=jnp.zeros(1))
+
+        def step(carry, _):
+            d, es = carry
+            d, es = stepper.advance(env.effects, model, z, d, es, jnp.asarray([u]), h, 1)
+            return (d, es), d.actuator_force[0]
+
+        return jax.lax.scan(step, (d0, env.effects.init_state()), None, length=400)[1]
+
+    band = env.z_of(**{"backlash:motor": 0.3})
+    at_limit, beyond = np.asarray(forces(band, 2.0)), np.asarray(forces(band, 5.0))
+    hit = int(np.argmax(at_limit != 0.0))
+    assert hit > 0 and (at_limit[:hit] == 0.0).all()      # nothing while the motor side crosses
+    assert at_limit[hit] > 3 * 2.0                         # the impact: past the motor's range
+    np.testing.assert_array_equal(beyond, at_limit)        # the motor's own command is limited
+    free = np.asarray(forces(env.default_z(), 5.0))
+    np.testing.assert_allclose(free, 2.0)

@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
+from sim2real._mjx import mjx
 from sim2real.physics.kinds.base import ACTUATOR, Kind, name_of, rows, take
 from sim2real.physics.kinds.gain import nominal_gain
 from sim2real.physics.params import Param
@@ -49,6 +50,13 @@ class Backlash(Kind):
     actuator's force reaching the joint, until it pulls away from the edge. The motor side is
     integrated implicitly (a stiff servo on a light rotor stays stable at any sub-step). Actuators
     with activation dynamics pass the command through their filter after this stage.
+
+    MuJoCo clamps every command to its ``ctrlrange`` after the command path. The motor's own
+    command is limited so, but the command this stage computes to pass a mesh force or an
+    impact to the joint is not a motor command: clamped, the joint would get less than the
+    motor side gives up. So where a backlash is in the spec, MJX's clamp is switched off
+    (``setup``) and this stage clamps its input, every actuator's, instead: the same physics
+    wherever the band is off.
     """
 
     owns = ("backlash", "backlash_inertia", "backlash_stiffness")
@@ -58,6 +66,12 @@ class Backlash(Kind):
     effect = "backlash"
     candidate_order = 64
     command_order = 30
+
+    def setup(self, pm) -> None:
+        # only the MJX model: native runs of the same model get raw commands, which MuJoCo clamps
+        if pm.spec.of_kind("backlash"):
+            pm.mx = pm.mx.replace(opt=pm.mx.opt.replace(
+                disableflags=pm.mx.opt.disableflags | mjx.DisableBit.CLAMPCTRL))
 
     def command_setup(self, m, spec, cfg):
         acts = np.arange(m.nu)
@@ -85,6 +99,9 @@ class Backlash(Kind):
             "damp": D,
             "qpos": np.array([m.jnt_qposadr[j] for j in joint], np.int32),
             "dof": np.array([m.jnt_dofadr[j] for j in joint], np.int32),
+            # the motor's command range (MuJoCo's clamp, which ``setup`` switches off in MJX)
+            "ctrl_lo": np.where(m.actuator_ctrllimited > 0, m.actuator_ctrlrange[:, 0], -np.inf),
+            "ctrl_hi": np.where(m.actuator_ctrllimited > 0, m.actuator_ctrlrange[:, 1], np.inf),
         }
 
     def command_state(self, data, ctrl):
@@ -95,6 +112,7 @@ class Backlash(Kind):
 
     def command(self, data, z, state, u, j, n, qpos, h, qvel=None):
         gap, w = state
+        u = jnp.clip(u, data["ctrl_lo"], data["ctrl_hi"])  # the motor's command, limited as MuJoCo would
         b = take(z, data["rows"])
         half = 0.5 * b
         q = qpos[data["qpos"]]

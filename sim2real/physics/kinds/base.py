@@ -9,7 +9,7 @@ hook                who calls it
 ``declares``        ``catalog.effect_params``: an effect parameter on every joint / actuator /
                     body (``attach``), neutral by default
 ``prepare, setup``  ``PhysicsModel.__init__``: structural model changes before ``put_model``;
-                    static index data
+                    static index data (and changes to the MJX model alone, ``pm.mx``)
 ``apply``           ``PhysicsModel.apply``: the ``mjx.Model`` fields a value changes (in ``order``)
 ``damping``         ``Effects.velocity_damping``: a velocity-dependent force written as damping
                     (implicit in MuJoCo's integrator, so stiff laws stay stable)
