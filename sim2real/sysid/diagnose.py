@@ -78,12 +78,12 @@ class DiagnoseConfig:
         first that does not, and all after it, are dropped. On 216 cases (the tuning half and the
         extra list of ``benchmarks/sysid_cases.py``) no true first effect sat above 0.99 of the
         error before it, while false ones sat at 0.999-1.15 (a hinge stiffness on cart-poles, a
-        backlash, a lag). After a named effect, the 7 false effects that joined sat at 0.81-1.00
-        of the error before them, 4 of them at 0.96-1.00, and the 28 true ones at 0.95 or below
-        (all but one at 0.89 or below): what a named effect leaves is partly the gap between
-        its model and the plant's, which another effect takes up by a little. 0.05 drops 3
-        false ones that 0.01 kept, and no true one; 0.08 also drops a true one (``tuning.md``
-        step 23).
+        backlash, a lag). After a named effect, the 8 false effects that joined sat at 0.81-1.15
+        of the error before them, 5 of them at 0.96 or above, and the 32 true ones at 0.95 or
+        below (all but two at 0.89 or below), but one that came after a false one (1.01): what
+        a named effect leaves is partly the gap between its model and the plant's, which
+        another effect takes up by a little. 0.05 drops 3 false ones that 0.01 kept, and no
+        true one; 0.08 also drops a true one (``tuning.md`` step 23).
       energy_explained: where the work put in is known (no actuator: a free swing or decay; or
         torque-driven joints, force = gain x command), a dissipation the short predictions cannot
         see (a joint damping or Coulomb friction) is named after the selection when the work it
