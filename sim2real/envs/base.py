@@ -29,6 +29,7 @@ from sim2real._mjx import mjx
 from sim2real.common import config as config_lib
 from sim2real.physics import catalog, stepper
 from sim2real.physics.effects import EffectState
+from sim2real.physics.kinds.base import ctrl_limits
 from sim2real.physics.params import Param, clip, in_bounds
 from sim2real.physics.plant import Plant
 
@@ -123,8 +124,7 @@ class Env:
         self.mj_model = self.plant.mj  # the model MJX runs (saturation clamps added), for parity
         self._data0 = self.plant.data0
         m = self.mj_model
-        self.ctrl_low = np.where(m.actuator_ctrllimited, m.actuator_ctrlrange[:, 0], -np.inf).astype(np.float32)
-        self.ctrl_high = np.where(m.actuator_ctrllimited, m.actuator_ctrlrange[:, 1], np.inf).astype(np.float32)
+        self.ctrl_low, self.ctrl_high = (x.astype(np.float32) for x in ctrl_limits(m))
 
     # ---------------------------------------------------------------- model loading ----
     def load_model(self) -> mujoco.MjModel:

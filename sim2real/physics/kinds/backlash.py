@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 
 from sim2real._mjx import mjx
-from sim2real.physics.kinds.base import ACTUATOR, Kind, name_of, rows, take
+from sim2real.physics.kinds.base import ACTUATOR, Kind, ctrl_limits, name_of, rows, take
 from sim2real.physics.kinds.gain import nominal_gain
 from sim2real.physics.params import Param
 
@@ -86,6 +86,8 @@ class Backlash(Kind):
         # the bias law in joint units: -K q - D qdot (a servo's stiffness, a damping bias)
         K = np.where(affine, -gear**2 * m.actuator_biasprm[:, 1], 0.0) if m.nu else np.zeros(0)
         D = np.where(affine, -gear**2 * m.actuator_biasprm[:, 2], 0.0) if m.nu else np.zeros(0)
+        # the motor's command range: MuJoCo's clamp, which ``setup`` switches off in MJX
+        lo, hi = ctrl_limits(m)
         return {
             "rows": r,
             # the motor side's inertia may be a parameter too (the diagnosis fits it); else the static guess
@@ -99,9 +101,8 @@ class Backlash(Kind):
             "damp": D,
             "qpos": np.array([m.jnt_qposadr[j] for j in joint], np.int32),
             "dof": np.array([m.jnt_dofadr[j] for j in joint], np.int32),
-            # the motor's command range (MuJoCo's clamp, which ``setup`` switches off in MJX)
-            "ctrl_lo": np.where(m.actuator_ctrllimited > 0, m.actuator_ctrlrange[:, 0], -np.inf),
-            "ctrl_hi": np.where(m.actuator_ctrllimited > 0, m.actuator_ctrlrange[:, 1], np.inf),
+            "ctrl_lo": lo,
+            "ctrl_hi": hi,
         }
 
     def command_state(self, data, ctrl):

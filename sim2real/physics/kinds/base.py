@@ -136,6 +136,14 @@ class Kind:
         through ``add(effect, target_name, params, grid, scales, search)``."""
 
 
+def ctrl_limits(m: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
+    """MuJoCo's command clamp: ``(low [nu], high [nu])`` from ``ctrlrange``, +-inf where an
+    actuator is not ``ctrllimited``."""
+    limited = m.actuator_ctrllimited > 0
+    return (np.where(limited, m.actuator_ctrlrange[:, 0], -np.inf),
+            np.where(limited, m.actuator_ctrlrange[:, 1], np.inf))
+
+
 def name_of(m: mujoco.MjModel, obj, i: int) -> str:
     n = mujoco.mj_id2name(m, obj, i)
     if not n:
