@@ -154,6 +154,30 @@ def test_masses_refitted_far_from_the_model_are_reported():
     assert far_masses({"mass:l3": refit["mass:l3"]}) is None
 
 
+def test_of_two_passing_effects_the_one_with_plausible_masses_joins():
+    """A lag that predicts best with the wheel at 1/58 of its mass (extra list's 1007) loses to a
+    backlash that passes with the mass near the model's; with no plausible one the best joins."""
+    from types import SimpleNamespace as NS
+
+    from sim2real.sysid.select import Model, SelectConfig, Selector, Trial
+
+    names = ["mass:wheel", "damping:spin"]
+    spec = type("Spec", (), {"__getitem__": lambda self, n: NS(default={"mass:wheel": 1.2, "damping:spin": 0.002}[n]),
+                             "index": lambda self, n: names.index(n)})()
+    tiles = NS(of=lambda label: np.arange(4))
+    fitter = NS(sh=NS(tiles=tiles, sys=NS(spec=spec)))
+
+    def trial(effect, mass, phi):
+        res = NS(z=np.array([mass, 0.002]), phi=phi)
+        M = Model([], res, np.full(4, phi / 4), names)
+        return Trial(NS(effect=effect, label=effect), 0.9, model=M, passed=True)
+
+    lag, band = trial("motor_lag", 0.021, 2.0), trial("backlash", 1.24, 14.0)
+    assert Selector(fitter, names, [], SelectConfig()).best([lag, band]) is band
+    assert Selector(fitter, names, [], SelectConfig(plausible_masses=False)).best([lag, band]) is lag
+    assert Selector(fitter, names, [], SelectConfig()).best([lag]) is lag
+
+
 def test_relative_changes_read_as_people_read_them():
     assert relative_change(0.1054, 0.02354) == "77.7% lower"
     assert relative_change(0.048, 1.548) == "32.2x worse"

@@ -28,7 +28,7 @@ from sim2real.algos.base import DRConfig
 from sim2real.common.config import ConfigError
 from sim2real.envs.base import Env
 from sim2real.physics import catalog
-from sim2real.sysid.diagnose import FAR_MASS, is_far_mass
+from sim2real.sysid.select import FAR_MASS, is_far_mass
 
 # fitted alongside an effect but with no counterpart in the envs' physics (a payload's distance
 # along the link, the motor inertia crossing a backlash): an error when a selected effect has them

@@ -31,7 +31,7 @@ from sim2real.sysid.derivatives import velocity_state
 from sim2real.sysid.export import write_fitted_mjcf
 from sim2real.sysid.fit import Fitter
 from sim2real.sysid.recordings import RecordingError, check_sample_rate, load_all
-from sim2real.sysid.select import Model, SelectConfig, Selector
+from sim2real.sysid.select import FAR_MASS, Model, SelectConfig, Selector, is_far_mass
 from sim2real.sysid.shooting import Shooting
 from sim2real.sysid.system import System
 from sim2real.sysid.trajectory import from_recording, signal_scale
@@ -72,6 +72,8 @@ class DiagnoseConfig:
         step this many times shorter, and passes if it passes there (0 or 1: it fails).
       top: candidates fitted in full per selection round (the best by the screen).
       max_effects: at most this many effects are named.
+      plausible_masses: of the effects that pass in a round, one whose fit keeps every re-fitted
+        body mass within ``FAR_MASS`` of the model's is preferred (``SelectConfig``).
       heldout_gain_first: the first effect kept must lower the held-out error (the report's
         NRMSE) by at least this fraction against the nominal re-fit ...
       heldout_gain: ... and every later one by this fraction against the model before it; the
@@ -122,6 +124,7 @@ class DiagnoseConfig:
     finer: int = SelectConfig.finer
     top: int = SelectConfig.top
     max_effects: int = SelectConfig.max_effects
+    plausible_masses: bool = SelectConfig.plausible_masses
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
     energy_explained: float = 0.5
@@ -154,14 +157,6 @@ class DiagnoseConfig:
         unknown = set(self.effects) - set(ALL_EFFECTS)
         if unknown:
             raise ValueError(f"effects: unknown effect(s) {sorted(unknown)}; the library has {', '.join(ALL_EFFECTS)}")
-
-
-FAR_MASS = 10.0  # a re-fitted mass this many times above or below the model's is reported
-
-
-def is_far_mass(nominal: float, fitted: float) -> bool:
-    """A re-fitted mass more than ``FAR_MASS`` times above or below the model's (``far_masses``)."""
-    return nominal > 0 and not 1 / FAR_MASS <= fitted / nominal <= FAR_MASS
 
 
 def far_masses(nominal_refit: dict) -> str | None:
@@ -420,7 +415,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         sel = Selector(fitter, system.nominal, cands,
                        SelectConfig(min_gain=cfg.min_gain, min_t=cfg.min_t, min_gain_first=cfg.min_gain_first,
                                     floor_level=cfg.floor_level, strong=cfg.strong, top=cfg.top,
-                                    max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer),
+                                    max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer,
+                                    plausible_masses=cfg.plausible_masses),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer)
         final, steps = sel.run()
         bar.step(text="checking on held-out data")

@@ -52,6 +52,13 @@ KAPPA = 0.1
 # a re-fit that moved a nominal parameter by more than this fraction of its value is screened from
 # the nominal values too (``Selector._bases``)
 RESET_MOVE = 0.25
+FAR_MASS = 10.0  # a re-fitted mass this many times above or below the model's stands in for other physics
+
+
+def is_far_mass(nominal: float, fitted: float) -> bool:
+    """A re-fitted mass more than ``FAR_MASS`` times above or below the model's: not a measurement
+    of the body (``diagnose.far_masses`` reports it; ``SelectConfig.plausible_masses``)."""
+    return nominal > 0 and not 1 / FAR_MASS <= fitted / nominal <= FAR_MASS
 
 
 @dataclasses.dataclass
@@ -117,6 +124,11 @@ class SelectConfig:
         (0 or 1: such a candidate fails).
       top: candidates fitted per round; max_effects: effects named at most;
       min_score: candidates scoring less in the screen are not fitted; iters: Gauss-Newton steps.
+      plausible_masses: of the candidates that pass, one whose fit keeps every body's mass within
+        ``FAR_MASS`` of the model's is preferred to one that needs a mass far off: a user's model
+        gets its masses roughly right, and a mass 50x off stands in for physics the effect leaves
+        unexplained (a flywheel whose backlash a motor lag "explained" with the wheel at 1/58 of
+        its mass). Only where none passes with plausible masses does the best of the rest join.
     """
 
     min_gain: float = 0.05
@@ -130,6 +142,7 @@ class SelectConfig:
     iters: int = 6
     floor_step: float = 2.0
     finer: int = 4
+    plausible_masses: bool = True
 
 
 def _paired_t(d: np.ndarray) -> float:
@@ -526,16 +539,26 @@ class Selector:
                     continue
             if not passed:
                 break
-            # among the candidates that passed, the one that predicts all the training data best:
-            # the validation tail alone can be too short to rank two that both explain it (a
-            # delay and a lag at the noise floor), while the fitted part still tells them apart
-            best = min(passed, key=lambda t: t.model.result.phi + np.sum(t.model.val))
+            best = self.best(passed)
             if best.candidate.effect == "coulomb_friction":
                 best = self._asymmetry(M, best)
             M = best.model
             steps.append(M)
             remaining = [c for c in remaining if c.label != best.candidate.label]
         return self._prune(M, steps)
+
+    def best(self, passed: list[Trial]) -> Trial:
+        """Of the candidates that passed, the one that predicts all the training data best (the
+        validation tail alone can be too short to rank two that both explain it: a delay and a lag
+        at the noise floor, while the fitted part still tells them apart); with plausible masses
+        first (``SelectConfig.plausible_masses``)."""
+        plausible = [t for t in passed if not self.far_masses(t.model)] if self.cfg.plausible_masses else []
+        return min(plausible or passed, key=lambda t: t.model.result.phi + np.sum(t.model.val))
+
+    def far_masses(self, M: Model) -> list[str]:
+        """The body masses ``M`` re-fitted more than ``FAR_MASS`` times off the model's."""
+        return [n for n in M.params if n.startswith("mass:")
+                and is_far_mass(float(self.spec[n].default), float(M.z[self.spec.index(n)]))]
 
     def _without(self, M: Model, c: Candidate) -> Model:
         """``M`` re-fitted without effect ``c`` (its parameters back at their neutral values)."""
