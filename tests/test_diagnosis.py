@@ -375,6 +375,48 @@ def test_a_free_swing_without_actuators_is_diagnosed(tmp_path):
     assert _named(res) == [("viscous_damping", "hinge")]
 
 
+_CHATTER = """<mujoco model="chatter"><option timestep="0.002" integrator="implicitfast"/>
+  <worldbody><body name="bar"><joint name="hinge" type="hinge" axis="0 1 0" damping="0.01"/>
+    <geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.01" mass="0.2" contype="0" conaffinity="0"/>
+  </body></worldbody>
+  <actuator><motor name="motor" joint="hinge" ctrllimited="true" ctrlrange="-1 1"/></actuator></mujoco>"""
+
+
+def test_the_noise_of_motion_rougher_than_a_cubic_follows_is_read_from_the_model(tmp_path):
+    """A command flipping between its limits every sample (a PD loop at the edge of stability) moves
+    the bar faster than a 7-sample cubic follows: ``noise_std`` reads 1e-4 rad of noise as tens
+    of times more; the model's own short predictions read it within a factor of 2, and the
+    velocity estimates' error (tens of rad/s off) widens their prior."""
+    import importlib
+
+    from sim2real.sysid.recordings import load_all
+    from sim2real.sysid.system import System
+    from sim2real.sysid.trajectory import from_recording
+
+    diag = importlib.import_module("sim2real.sysid.diagnose")
+    (tmp_path / "m.xml").write_text(_CHATTER)
+    m = mujoco.MjModel.from_xml_string(_CHATTER)
+    m.opt.timestep = 1e-4
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(1)
+    rows = []
+    for k in range(400):                                       # 4 s logged at 100 Hz
+        u = float(np.clip(np.sign(np.sin(0.5 * k)) * 0.3 + (0.7 if k % 2 else -0.7), -1, 1))
+        rows.append((k * 0.01, d.qpos[0] + 1e-4 * rng.normal(), u))
+        d.ctrl[0] = u
+        for _ in range(100):
+            mujoco.mj_step(m, d)
+    np.savetxt(tmp_path / "r.csv", np.array(rows), delimiter=",", header="time,qpos:hinge,ctrl:motor", comments="")
+    system = System(str(tmp_path / "m.xml"), dt=0.01)
+    rec = load_all([str(tmp_path / "r.csv")], mujoco.MjModel.from_xml_path(str(tmp_path / "m.xml")), "test")[0]
+    tr = from_recording(rec, system)
+    assert tr.sigma_q[0] > 10e-4                               # the smoothness estimate: far too large
+    sigma_q, sigma_v = diag.rough_motion_noise(system, tr)
+    assert 0.5e-4 < sigma_q[0] < 2e-4
+    tr2 = from_recording(rec, system, sigma_q=sigma_q, sigma_v=sigma_v)
+    assert tr2.sigma_q[0] == sigma_q[0] and tr2.sigma_v[0] >= sigma_v[0]
+
+
 _DOUBLE = """<mujoco model="double"><option timestep="0.001" integrator="RK4"/>
   <worldbody><body name="upper"><joint name="shoulder" type="hinge" axis="0 1 0" damping="{damping}"/>
     <geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.01" mass="0.3" contype="0" conaffinity="0"/>

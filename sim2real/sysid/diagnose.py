@@ -22,6 +22,7 @@ import time
 
 import mujoco
 import numpy as np
+from scipy.optimize import least_squares
 
 from sim2real.common import output
 from sim2real.common.progress import Bar
@@ -34,7 +35,7 @@ from sim2real.sysid.recordings import RecordingError, check_sample_rate, load_al
 from sim2real.sysid.select import FAR_MASS, Model, SelectConfig, Selector, is_far_mass
 from sim2real.sysid.shooting import Shooting
 from sim2real.sysid.system import System
-from sim2real.sysid.trajectory import from_recording, signal_scale
+from sim2real.sysid.trajectory import from_recording, quantisation_noise, signal_scale
 
 
 @dataclasses.dataclass(frozen=True)
@@ -214,22 +215,78 @@ def _native_rollout(m: mujoco.MjModel, d: mujoco.MjData, tr, s: int, steps: int,
     return q
 
 
+ROUGH = 3.0  # the smoothness estimate of the noise is replaced where the model's is this many times lower
+
+
+def rough_motion_noise(system: System, tr, windows: int = 16, W: int = 6, finer: int = 8):
+    """``(sigma_q [nq], sigma_v [nv])``: the positions' noise as the nominal model sees it, and how
+    far the data's velocity estimates are from the velocities it fits; or None (a model with
+    activations, a recording too short).
+
+    ``noise_std`` takes what a local cubic over 7 samples does not follow for noise. Motion
+    rougher than that -- a PD loop at the edge of its stability, its command flipping between
+    limits every sample -- is then read as noise (a 3-link arm's 1e-4 rad as 0.03-0.23 rad), and
+    every scale of the diagnosis with it: residual weights, the physics step, the floors. Here
+    the model itself follows the motion: at ``windows`` points of the recording it is simulated
+    natively ``W`` samples ahead through the recorded commands, at a step ``finer`` times shorter
+    than the diagnosis' own (a step not yet converged must not count as noise), from a start
+    position and velocity fitted to those samples (least squares); what it leaves, per joint,
+    over the residual's degrees of freedom (2 fitted per joint), median over the windows. A
+    missing effect adds to it; so it only stands in for the smoothness estimate where it is
+    ``ROUGH`` times lower (``_run``). The velocities a cubic estimates from such motion are off
+    by far more than the noise implies (tens of rad/s where the arm chatters): the RMS of the
+    fitted velocities' differences from them bounds the start velocities' prior from below.
+    """
+    m = system.mj
+    T, nq = len(tr.q), m.nq
+    if m.na or T < 4 * W:
+        return None
+    sub = system.substeps * finer
+    h = tr.dt / sub
+    d = mujoco.MjData(m)
+    per, dv = [], []
+    m.opt.timestep = h
+    try:
+        for s in np.linspace(1, T - W - 2, windows).astype(int):
+            def resid(x, s=s):
+                q = _native_rollout(m, d, tr, s, W, sub, x[:nq], x[nq:])
+                return np.concatenate([x[:nq] - tr.q[s], (q - tr.q[s + 1: s + 1 + W]).ravel()])
+
+            x0 = np.concatenate([tr.q[s], velocity_state(tr.v[s], tr.a[s], h)])
+            with np.errstate(all="ignore"):
+                r0 = resid(x0)
+                if not np.all(np.isfinite(r0)):
+                    continue
+                fit = least_squares(resid, x0, method="lm")
+            r = fit.fun.reshape(W + 1, nq)
+            if np.all(np.isfinite(r)):
+                per.append(np.sqrt(np.sum(r**2, 0) / (W + 1 - 2)))
+                dv.append(fit.x[nq:] - x0[nq:])
+    finally:
+        m.opt.timestep = system.h
+    if len(per) < windows // 2:
+        return None
+    # (a quantised signal that stands still over a window leaves nothing: its step bounds it)
+    return np.maximum(np.median(per, 0), quantisation_noise(tr.q)), np.sqrt(np.mean(np.square(dv), 0))
+
+
 def _native_runs(system: System, trajs, n: int, steps: int, starts: int = 3, substeps: int | None = None,
-                 with_qvel: bool = False):
+                 with_qvel: bool = False, at=None):
     """Positions ``[k, steps, nq]`` (``with_qvel``: and velocities) of the native model simulated
     from measured states at ``starts`` points of every recording through the recorded commands
-    (``substeps`` per sample)."""
+    (``substeps`` per sample); or from the starts ``at``: ``[(recording index, sample, velocity)]``."""
     m = system.mj
     sub = substeps or system.substeps
     h = trajs[0].dt / sub
     m.opt.timestep = h
     d = mujoco.MjData(m)
     out = []
+    if at is None:
+        at = [(i, s, velocity_state(tr.v[s], tr.a[s], h)) for i, tr in enumerate(trajs)
+              for s in np.linspace(0, max(len(tr) - steps - 1, 0), starts).astype(int)]
     try:
-        for tr in trajs:
-            for s in np.linspace(0, max(len(tr) - steps - 1, 0), starts).astype(int):
-                out.append(_native_rollout(m, d, tr, s, steps, sub, tr.q[s], velocity_state(tr.v[s], tr.a[s], h),
-                                           with_qvel))
+        for i, s, v in at:
+            out.append(_native_rollout(m, d, trajs[i], s, steps, sub, trajs[i].q[s], v, with_qvel))
     finally:
         m.opt.timestep = system.h
     return np.stack(out)
@@ -266,7 +323,8 @@ def choose_substeps(system: System, trajs, max_substeps: int = 64, seconds: floa
     return n
 
 
-def discretization_level(system: System, trajs, sh: Shooting, seconds: float = 0.3, finer: int = 8) -> float:
+def discretization_level(system: System, trajs, sh: Shooting, seconds: float = 0.3, finer: int = 8,
+                         at=None) -> float:
     """How much misfit the physics step alone causes, in the units of the selection's misfit
     level (``Selector.level``: squared error per residual, each signal over its weighting scale).
 
@@ -275,11 +333,12 @@ def discretization_level(system: System, trajs, sh: Shooting, seconds: float = 0
     squared difference of positions (and velocities, where the fit compares them) is what the
     step's own error adds to every model's misfit. An effect can absorb that error -- a damping
     for the integrator's, a lag for its phase -- so no effect is named on a model whose misfit
-    it could explain (``SelectConfig.floor_step``)."""
+    it could explain (``SelectConfig.floor_step``). ``at``: the starts (``_native_runs``), where the
+    data's own velocity estimates are too far off to start from (rough motion)."""
     n = system.substeps
     steps = max(5, int(round(seconds / trajs[0].dt)))
-    a = _native_runs(system, trajs, steps, steps, substeps=n, with_qvel=True)
-    b = _native_runs(system, trajs, steps, steps, substeps=finer * n, with_qvel=True)
+    a = _native_runs(system, trajs, steps, steps, substeps=n, with_qvel=True, at=at)
+    b = _native_runs(system, trajs, steps, steps, substeps=finer * n, with_qvel=True, at=at)
     nq = system.mj.nq
     parts = [((a[..., :nq] - b[..., :nq]) / sh.scale["qpos"]).ravel()]
     if "qvel" in sh.signals:
@@ -361,6 +420,17 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             system.check_recording_covers(r)
         window = int(round(cfg.window_seconds / dt)) | 1 if cfg.window_seconds > 0 else None
         trajs = [from_recording(r, system, window) for r in train + held]
+        rough_any = False
+        for i, r in enumerate(train + held):  # motion rougher than the noise estimate follows
+            rough = rough_motion_noise(system, trajs[i])
+            if rough is not None and np.any(rough[0] * ROUGH < trajs[i].sigma_q):
+                (sm, sv), old = rough, trajs[i].sigma_q
+                trajs[i] = from_recording(r, system, window, sigma_q=np.where(sm * ROUGH < old, sm, old), sigma_v=sv)
+                rough_any = True
+                system.notes.append(
+                    f"{r.name}: position noise {', '.join(f'{x:.3g}' for x in trajs[i].sigma_q)} from the model's own "
+                    f"short predictions; the data's smoothness said {', '.join(f'{x:.3g}' for x in old)} (the motion "
+                    "is rougher than a local cubic follows, e.g. a command that flips every sample)")
         bar.step(text="choosing the physics step")
         n = choose_substeps(system, trajs[: len(train)])
         if n != system.substeps:
@@ -388,10 +458,23 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         spec = system.spec
         scales = {n: max(abs(float(spec[n].default)), 1e-6) for n in system.nominal}
         fitter = Fitter(sh, scales)
+        if rough_any:
+            # the data's start velocities of rough motion are far off (a prediction from them misses
+            # by a radian where the noise is 1e-4): every segment's start is first refined on the
+            # nominal model (its prior stays as wide as ``rough_motion_noise`` found the estimates' error)
+            fitter.narrow_velocity_steps()
+            fitter.v_hat = fitter.velocities(spec.default.copy(), fitter.v_hat, np.arange(sh.S), iters=8)[0]
         # the step's error grows along a prediction: measured over the segments' own length (at
         # least 0.3 s), or a long horizon's floor is too low for what the step does to it
         floor_seconds = max(0.3, H * dt)
-        step_level = discretization_level(system, trajs[: len(train)], sh, seconds=floor_seconds)
+        if rough_any:  # (rough motion: a replay's differences grow fast past the segments themselves)
+            floor_seconds = H * dt
+        at = None
+        if rough_any:  # from the refined start velocities of 3 segments per recording
+            offs = np.cumsum([0] + [len(tr) for tr in trajs])
+            at = [(i, int(sh.tiles.start[t] - offs[i]), fitter.v_hat[t]) for i in range(len(train))
+                  for t in np.where(sh.tiles.traj == i)[0][np.linspace(0, (sh.tiles.traj == i).sum() - 1, 3).astype(int)]]
+        step_level = discretization_level(system, trajs[: len(train)], sh, seconds=floor_seconds, at=at)
 
         def finer(k: int):
             """The same segments simulated with a physics step ``k`` times shorter (built only when
@@ -399,8 +482,10 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             fine = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay,
                           substeps=system.substeps * k)
             sh_f = Shooting(fine, trajs, H, heldout=heldout_idx, val_fraction=cfg.val_fraction)
-            return Fitter(sh_f, fitter.scales), discretization_level(fine, trajs[: len(train)], sh_f,
-                                                                     seconds=floor_seconds)
+            f_fine = Fitter(sh_f, fitter.scales)
+            if rough_any:  # the same segments: their refined start velocities
+                f_fine.v_hat, f_fine.dv = fitter.v_hat.copy(), fitter.dv
+            return f_fine, discretization_level(fine, trajs[: len(train)], sh_f, seconds=floor_seconds, at=at)
         bar.step(text=f"compiling the simulator ({sh.S} segments of {H} samples)")
         z0 = spec.default.copy()
         check_tiles = sh.tiles.of("heldout") if held else sh.tiles.of("val")

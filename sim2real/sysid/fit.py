@@ -75,6 +75,13 @@ class Fitter:
         self.dv = np.maximum(np.median(self.sigma_v, 0), 1e-4 * (np.abs(self.v_hat).max(0) + 1e-3))
         self.nv = shooting.v0.shape[1]
 
+    def narrow_velocity_steps(self) -> None:
+        """At most 5% of the typical speed as the velocities' finite-difference step: where the
+        data's estimates are poor (rough motion) their prior is wide, and a step that wide would
+        measure a secant of the motion, not its slope."""
+        rms = np.sqrt(np.mean(self.v_hat**2, 0))
+        self.dv = np.maximum(np.minimum(self.dv, 0.05 * rms + 1e-12), 1e-4 * (np.abs(self.v_hat).max(0) + 1e-3))
+
     # ------------------------------------------------------------------------------------------
     def residuals(self, zs, v0s, tiles) -> np.ndarray:
         """``[b, k, m]`` for any number ``b`` of physics (batched by 8)."""
@@ -259,6 +266,9 @@ class Fitter:
             return np.sum(r**2, 1) + np.sum(((v[tiles] - self.v_hat[tiles]) / self.sigma_v[tiles]) ** 2, 1)
 
         r0 = list(self.residuals(np.stack(zs), np.stack(v0s), tiles))
+        # Levenberg damping per segment: 0 until a step fails to lower its objective (so one
+        # iteration is plain Gauss-Newton), then raised tenfold per failure, eased on success
+        mu = [np.zeros(len(tiles)) for _ in range(M)]
         for _ in range(iters):
             batch_z, batch_v = [], []
             for i in range(M):
@@ -271,7 +281,8 @@ class Fitter:
             trial = []
             for i in range(M):
                 J_v = np.stack([(rk[i * self.nv + k] - r0[i]) / dv[k] for k in range(self.nv)], -1)
-                A = np.einsum("kmi,kmj->kij", J_v, J_v) + lam[:, :, None] * np.eye(self.nv)[None]
+                JJ = np.einsum("kmi,kmj->kij", J_v, J_v)
+                A = JJ + (lam + mu[i][:, None] * np.einsum("kii->ki", JJ))[:, :, None] * np.eye(self.nv)[None]
                 b = np.einsum("kmi,km->ki", J_v, r0[i]) + (v0s[i][tiles] - self.v_hat[tiles]) * lam
                 vv = v0s[i].copy()
                 vv[tiles] = v0s[i][tiles] - np.linalg.solve(A, b[..., None])[..., 0]
@@ -279,6 +290,7 @@ class Fitter:
             r1 = self.residuals(np.stack(zs), np.stack(trial), tiles)
             for i in range(M):
                 better = obj(r1[i], trial[i]) < obj(r0[i], v0s[i])
+                mu[i] = np.where(better, mu[i] / 3, np.maximum(10 * mu[i], 1e-3))
                 v0s[i][tiles[better]] = trial[i][tiles[better]]
                 r0[i] = np.where(better[:, None], r1[i], r0[i])
         return [(v0s[i], obj(r0[i], v0s[i])) for i in range(M)]

@@ -100,18 +100,21 @@ def noise_std(x: np.ndarray) -> np.ndarray:
         return np.zeros(x.shape[1])
     res = x - savgol_filter(x, 7, 3, axis=0, mode="interp")
     mad = 1.4826 * np.median(np.abs(res - np.median(res, 0)), 0) / np.sqrt(1 - 7 / 21)
-    out = np.empty(x.shape[1])
+    return np.maximum(np.maximum(mad, quantisation_noise(x)), 1e-12 * (np.ptp(x, 0) + 1e-12))
+
+
+def quantisation_noise(x: np.ndarray) -> np.ndarray:
+    """Per column of ``x [T, n]``: a quantised signal's step / sqrt(12), else 0 (``noise_std``)."""
+    out = np.zeros(x.shape[1])
     for k in range(x.shape[1]):
         d = np.diff(x[:, k])
         steps = np.abs(d[d != 0])
-        q = 0.0
         if len(steps):
             smallest = np.min(steps)
             r = steps / smallest
             on_grid = np.mean(np.abs(r - np.round(r)) < 1e-3) > 0.99
             if on_grid or np.mean(d == 0) > 0.2:  # a quantised signal
-                q = float(smallest) / np.sqrt(12)
-        out[k] = max(mad[k], q, 1e-12 * (np.ptp(x[:, k]) + 1e-12))
+                out[k] = float(smallest) / np.sqrt(12)
     return out
 
 
@@ -201,20 +204,26 @@ def smoothing_error(x: np.ndarray, w: int, sigma: np.ndarray, dt: float, deriv: 
     return np.sqrt(noise**2 + bias2)
 
 
-def from_recording(rec, system, window: int | None = None) -> Trajectory:
+def from_recording(rec, system, window: int | None = None, sigma_q: np.ndarray | None = None,
+                   sigma_v: np.ndarray | None = None) -> Trajectory:
     """Build the trajectory of ``rec`` for ``system`` (a ``sysid.system.System`` or a
     :class:`ModelColumns`: what has ``arrays`` and ``joints``).
 
-    ``window``: Savitzky-Golay window in samples (default: chosen from the data).
+    ``window``: Savitzky-Golay window in samples (default: chosen from the data); ``sigma_q``:
+    the positions' noise ``[nq]`` where it is known better than the data's smoothness tells
+    (default: ``noise_std``; ``diagnose.rough_motion_noise``), and ``sigma_v`` ``[nv]`` the least
+    standard error of the velocity estimates there.
     """
     qpos, ctrl, force, qfrc = system.arrays(rec)
     dt = rec.dt
-    sigma_q = noise_std(qpos)
+    sigma_q = noise_std(qpos) if sigma_q is None else np.asarray(sigma_q, float)
     w = window or choose_window(qpos, sigma_q, dt)
     w = min(w, len(qpos) - (1 - len(qpos) % 2))
     v = _smooth(qpos, w, dt, 1)
     a = _smooth(qpos, w, dt, 2)
     sigma_v_t = smoothing_error(qpos, w, sigma_q, dt, 1)
+    if sigma_v is not None:
+        sigma_v_t = np.maximum(sigma_v_t, sigma_v)
     qvel = None
     sigma_qvel = None
     if all(rec.get("qvel", j) is not None for j in system.joints):
