@@ -434,7 +434,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         bar.step(text="choosing the physics step")
         n = choose_substeps(system, trajs[: len(train)])
         if n != system.substeps:
+            kept = system.notes  # (what was found about the data so far)
             system = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay, substeps=n)
+            system.notes += [x for x in kept if x not in system.notes]
         bar.step(text="choosing the prediction horizon")
         H = (int(round(cfg.horizon_seconds / dt)) if cfg.horizon_seconds > 0 else choose_horizon(system, trajs))
         H = chosen_H = max(MIN_HORIZON, H)
