@@ -460,19 +460,18 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         spec = system.spec
         scales = {n: max(abs(float(spec[n].default)), 1e-6) for n in system.nominal}
         fitter = Fitter(sh, scales)
+        # the step's error grows along a prediction: measured over the segments' own length (at
+        # least 0.3 s), or a long horizon's floor is too low for what the step does to it
+        floor_seconds, at = max(0.3, H * dt), None
         if rough_any:
             # the data's start velocities of rough motion are far off (a prediction from them misses
             # by a radian where the noise is 1e-4): every segment's start is first refined on the
-            # nominal model (its prior stays as wide as ``rough_motion_noise`` found the estimates' error)
+            # nominal model (its prior stays as wide as ``rough_motion_noise`` found their error);
+            # the step's floor is measured from 3 of those starts per recording, over the segments'
+            # own length only (a replay's differences grow fast past it)
             fitter.narrow_velocity_steps()
             fitter.v_hat = fitter.velocities(spec.default.copy(), fitter.v_hat, np.arange(sh.S), iters=8)[0]
-        # the step's error grows along a prediction: measured over the segments' own length (at
-        # least 0.3 s), or a long horizon's floor is too low for what the step does to it
-        floor_seconds = max(0.3, H * dt)
-        if rough_any:  # (rough motion: a replay's differences grow fast past the segments themselves)
             floor_seconds = H * dt
-        at = None
-        if rough_any:  # from the refined start velocities of 3 segments per recording
             offs = np.cumsum([0] + [len(tr) for tr in trajs])
             at = [(i, int(sh.tiles.start[t] - offs[i]), fitter.v_hat[t]) for i in range(len(train))
                   for t in np.where(sh.tiles.traj == i)[0][np.linspace(0, (sh.tiles.traj == i).sum() - 1, 3).astype(int)]]
