@@ -472,9 +472,10 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             fitter.narrow_velocity_steps()
             fitter.v_hat = fitter.velocities(spec.default.copy(), fitter.v_hat, np.arange(sh.S), iters=8)[0]
             floor_seconds = H * dt
-            offs = np.cumsum([0] + [len(tr) for tr in trajs])
-            at = [(i, int(sh.tiles.start[t] - offs[i]), fitter.v_hat[t]) for i in range(len(train))
-                  for t in np.where(sh.tiles.traj == i)[0][np.linspace(0, (sh.tiles.traj == i).sum() - 1, 3).astype(int)]]
+            at = []
+            for i in range(len(train)):
+                mine = np.where(sh.tiles.traj == i)[0]
+                at += [(i, int(sh.tiles.local[t]), fitter.v_hat[t]) for t in mine[np.linspace(0, len(mine) - 1, 3).astype(int)]]
         step_level = discretization_level(system, trajs[: len(train)], sh, seconds=floor_seconds, at=at)
 
         def finer(k: int):
@@ -875,7 +876,7 @@ def _locate(system, sh, pred, res, res_fit) -> dict:
             # windows: segments ranked by their error
             for i, s in enumerate(tiles):
                 tr = sh.trajs[sh.tiles.traj[s]]
-                start = int(sh.tiles.start[s] - sum(len(t) for t in sh.trajs[: sh.tiles.traj[s]]))
+                start = int(sh.tiles.local[s])
                 out["worst_windows"].append({"recording": tr.name, "signal": nm, "t_start": float(tr.time[start]),
                                              "t_end": float(tr.time[min(start + sh.H, len(tr) - 1)]),
                                              "nrmse": float(np.sqrt(np.mean(e[i, :, k] ** 2)) / std)})

@@ -13,12 +13,11 @@ import numpy as np  # noqa: E402
 def _stitch(sh, pred, tiles, key, k, traj_index):
     """Predictions of segments of one trajectory placed on its time axis (NaN elsewhere)."""
     tr = sh.trajs[traj_index]
-    offset = sum(len(t) for t in sh.trajs[:traj_index])
     out = np.full(len(tr), np.nan)
     for i, s in enumerate(tiles):
         if sh.tiles.traj[s] != traj_index:
             continue
-        st = int(sh.tiles.start[s] - offset)
+        st = int(sh.tiles.local[s])
         seg = np.where(pred["ok"][0][i], pred[key][0][i, :, k], np.nan)
         out[st + 1: st + 1 + sh.H] = seg
     return out
@@ -33,7 +32,6 @@ def overlay(path, sh, tiles, pred_b, pred_a, traj_index, names, units):
             rows.append((key, k, nm))
     fig, axes = plt.subplots(2 * len(rows), 1, figsize=(9, 2.3 * len(rows) + 0.8), squeeze=False,
                              gridspec_kw={"height_ratios": [3, 1.3] * len(rows)}, sharex=True)
-    offset = sum(len(t) for t in sh.trajs[:traj_index])
     for r, (key, k, nm) in enumerate(rows):
         meas = {"qpos": tr.q, "qvel": tr.qvel, "force": tr.force}[key][:, k]
         nb, na = _stitch(sh, pred_b, tiles, key, k, traj_index), _stitch(sh, pred_a, tiles, key, k, traj_index)
@@ -43,7 +41,7 @@ def overlay(path, sh, tiles, pred_b, pred_a, traj_index, names, units):
         ax.plot(tr.time, na, "C0", lw=0.9, alpha=0.85, label="fitted model")
         for s in tiles:
             if sh.tiles.traj[s] == traj_index:
-                ax.axvline(tr.time[int(sh.tiles.start[s] - offset)], color="0.85", lw=0.5, zorder=0)
+                ax.axvline(tr.time[int(sh.tiles.local[s])], color="0.85", lw=0.5, zorder=0)
         ax.set_ylabel(f"{nm} [{units.get(nm, '')}]", fontsize=8)
         ax2.plot(tr.time, nb - meas, "C3", lw=0.8)
         ax2.plot(tr.time, na - meas, "C0", lw=0.8)
@@ -185,8 +183,7 @@ def heldout_animation(path, system, sh, tiles, pred_b, pred_a, traj_index, secon
     qb = np.stack([_stitch(sh, pred_b, tiles, "qpos", k, traj_index) for k in range(len(joints))], 1)
     qa = np.stack([_stitch(sh, pred_a, tiles, "qpos", k, traj_index) for k in range(len(joints))], 1)
     step = max(int(round(1.0 / (fps * tr.dt))), 1)  # samples per frame
-    offset = sum(len(t) for t in sh.trajs[:traj_index])
-    starts = sorted(int(sh.tiles.start[s] - offset) + 1 for s in tiles if sh.tiles.traj[s] == traj_index)
+    starts = sorted(int(sh.tiles.local[s]) + 1 for s in tiles if sh.tiles.traj[s] == traj_index)
     idx, budget = [], int(seconds / tr.dt)
     for st in starts:
         seg = [i for i in range(st, min(st + sh.H, len(tr)), step) if np.isfinite(qa[i]).all() and np.isfinite(qb[i]).all()]

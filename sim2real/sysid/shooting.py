@@ -38,7 +38,8 @@ class Tiles:
     """Segments of all recordings (consecutive within each recording).
 
     Attributes:
-      start: ``[S]`` global index of each segment's first sample (recordings concatenated).
+      start: ``[S]`` global index of each segment's first sample (recordings concatenated);
+        local: ``[S]`` the same sample's index within its own recording.
       traj: ``[S]`` which trajectory; first: ``[S]`` bool, first segment of its recording.
       label: ``[S]`` "fit" | "val" | "heldout" | "" (a segment straddling the fit/val boundary) |
         "edge" (starting within half a smoothing window of the recording's start).
@@ -48,6 +49,7 @@ class Tiles:
     traj: np.ndarray
     first: np.ndarray
     label: np.ndarray
+    local: np.ndarray
 
     def of(self, label: str) -> np.ndarray:
         return np.where(self.label == label)[0]
@@ -76,12 +78,13 @@ class Shooting:
         self.dt = trajs[0].dt
         self.n = system.substeps
         H = self.H
-        starts, traj, first, label, offset = [], [], [], [], 0
+        starts, local, traj, first, label, offset = [], [], [], [], [], 0
         for r, tr in enumerate(trajs):
             T = len(tr)
             boundary = int(T * (1 - val_fraction))
             for k, s in enumerate(range(0, T - H, H)):
                 starts.append(offset + s)
+                local.append(s)
                 traj.append(r)
                 first.append(k == 0)
                 if s < tr.window // 2 + 1:
@@ -107,7 +110,7 @@ class Shooting:
             if len(idx) > cap:  # keep evenly spaced segments, mark the rest unused
                 keep = idx[np.round(np.linspace(0, len(idx) - 1, cap)).astype(int)]
                 label[np.setdiff1d(idx, keep)] = name + "-unused"
-        self.tiles = Tiles(np.array(starts), np.array(traj), np.array(first), label.astype(str))
+        self.tiles = Tiles(np.array(starts), np.array(traj), np.array(first), label.astype(str), np.array(local))
         S = len(starts)
         self.Sc = max(len(self.tiles.of(x)) for x in ("fit", "val", "heldout"))
         cat = lambda f: np.concatenate([f(tr) for tr in trajs])  # noqa: E731
@@ -131,9 +134,8 @@ class Shooting:
         self.q0 = q_all[st]
         self.v0 = velocity_state(cat(lambda tr: tr.v)[st], cat(lambda tr: tr.a)[st], system.h)
         # each segment's start velocity is trusted as far as the data there allows (``sigma_v_t``)
-        offs = np.cumsum([0] + [len(tr) for tr in trajs])
-        local = np.stack([trajs[r].sigma_v_t[st[s] - offs[r]] if trajs[r].sigma_v_t is not None else trajs[r].sigma_v
-                          for s, r in enumerate(self.tiles.traj)])
+        local = np.stack([trajs[r].sigma_v_t[s] if trajs[r].sigma_v_t is not None else trajs[r].sigma_v
+                          for s, r in zip(self.tiles.local, self.tiles.traj)])
         self.sigma_v = local * 1.5 + 1e-9 * (np.abs(self.v0).max(0) + 1)   # [S, nv]
         # inputs of the jitted function (device arrays, passed as arguments, not baked in)
         act0 = np.zeros((len(trajs), m.na))
