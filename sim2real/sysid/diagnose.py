@@ -469,13 +469,15 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             # nominal model (its prior stays as wide as ``rough_motion_noise`` found their error);
             # the step's floor is measured from 3 of those starts per recording, over the segments'
             # own length only (a replay's differences grow fast past it)
+            # (only the segments some step uses: a fast log cut into short segments has most of
+            # them unused, and at 40 physics steps per sample they cost most of a diagnosis)
             fitter.narrow_velocity_steps()
-            fitter.v_hat = fitter.velocities(spec.default.copy(), fitter.v_hat, np.arange(sh.S), iters=8)[0]
+            floor_from = [np.where(sh.tiles.traj == i)[0] for i in range(len(train))]
+            floor_from = [mine[np.linspace(0, len(mine) - 1, 3).astype(int)] for mine in floor_from]
+            used = np.unique(np.concatenate([sh.tiles.of(k) for k in ("fit", "val", "heldout")] + floor_from))
+            fitter.v_hat = fitter.velocities(spec.default.copy(), fitter.v_hat, used, iters=8)[0]
             floor_seconds = H * dt
-            at = []
-            for i in range(len(train)):
-                mine = np.where(sh.tiles.traj == i)[0]
-                at += [(i, int(sh.tiles.local[t]), fitter.v_hat[t]) for t in mine[np.linspace(0, len(mine) - 1, 3).astype(int)]]
+            at = [(i, int(sh.tiles.local[t]), fitter.v_hat[t]) for i, mine in enumerate(floor_from) for t in mine]
         step_level = discretization_level(system, trajs[: len(train)], sh, seconds=floor_seconds, at=at)
 
         def finer(k: int):
