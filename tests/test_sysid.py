@@ -272,6 +272,41 @@ def test_segments_start_the_command_path_from_the_recording(tmp_path):
     assert np.sqrt(np.mean(e_pass1 ** 2)) < 0.5 * np.sqrt(np.mean(e_restart ** 2))
 
 
+def test_a_measured_velocity_noisier_than_the_motion_is_not_compared(tmp_path):
+    """A ``qvel`` column whose noise is larger than the motion it measures (an encoder's count
+    differenced at a fast rate) adds about one per residual to every model and dilutes every
+    relative measure: the segments leave it out (and the predictions' ``qvel`` with it). The
+    same column measured precisely is compared."""
+    import csv
+
+    from sim2real.sysid.shooting import Shooting
+    from sim2real.sysid.system import System
+    from sim2real.sysid.trajectory import from_recording
+
+    case = Case("pendulum", "motor_lag", "motor", (("motor_lag:motor", 0.1),), noise=0.0, seed=3)
+    path = str(tmp_path / "lag.csv")
+    record(case, path)
+    rows = list(csv.reader(open(path)))
+    t = np.array([float(r[0]) for r in rows[1:]])
+    q = np.array([float(r[rows[0].index("qpos:hinge")]) for r in rows[1:]])
+    v = np.gradient(q, t)
+    system = System(PENDULUM, dt=float(t[1] - t[0]))
+    rng = np.random.default_rng(0)
+    kept = {}
+    for name, noise in (("precise", 1e-3), ("noisy", 3.0)):
+        vm = v + noise * np.std(v) * rng.standard_normal(len(v))
+        out = str(tmp_path / f"{name}.csv")
+        with open(out, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(rows[0] + ["qvel:hinge"])
+            w.writerows(r + [f"{x:.9g}"] for r, x in zip(rows[1:], vm))
+        sh = Shooting(system, [from_recording(load(out, _model()), system)], 20, val_fraction=0.3)
+        pred = sh.predict(system.spec.default[None], sh.v0[None], sh.tiles.of("fit"))
+        kept[name] = ("qvel" in sh.signals, sh.left_out, pred["qvel"].shape[-1])
+    assert kept["precise"] == (True, [], 1)
+    assert kept["noisy"] == (False, ["qvel:hinge"], 0)
+
+
 def test_fitted_xml_scales_the_gain_law_as_the_simulator_does(tmp_path):
     """A motor and a position servo with their gains (and the servo's kv) off the declared values:
     the compiled fitted.xml holds the same gain/bias parameters as the model the fits simulate."""

@@ -342,7 +342,8 @@ def discretization_level(system: System, trajs, sh: Shooting, seconds: float = 0
     nq = system.mj.nq
     parts = [((a[..., :nq] - b[..., :nq]) / sh.scale["qpos"]).ravel()]
     if "qvel" in sh.signals:
-        parts.append(((a[..., nq:] - b[..., nq:]) / sh.scale["qvel"]).ravel())
+        c = nq + sh.qvel_cols
+        parts.append(((a[..., c] - b[..., c]) / sh.scale["qvel"]).ravel())
     e = np.concatenate(parts)
     e = e[np.isfinite(e)]
     return float(np.mean(e**2)) if e.size else 0.0
@@ -454,6 +455,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                      f"({k} {need} segments); record longer"
                                      + (", or set horizon_seconds= shorter" if H > MIN_HORIZON else ""))
             H = max(MIN_HORIZON, H // 2)
+        if sh.left_out:
+            system.notes.append(f"{', '.join(sh.left_out)} not compared with the predictions (the positions are): the "
+                                "measured velocity's noise is as large as the motion it measures")
         if H < chosen_H:
             system.notes.append(f"prediction horizon shortened to {H} samples ({H * dt:.3g} s) from {chosen_H}: "
                                 "the recordings are too short for the horizon the data chose")
@@ -683,7 +687,7 @@ def _nrmse(sh: Shooting, fitter: Fitter, zs, tiles) -> list[tuple[dict, dict]]:
 
 def _signal_names(sh: Shooting) -> dict:
     s = sh.sys
-    return {"qpos": [f"qpos:{j}" for j in s.joints], "qvel": [f"qvel:{j}" for j in s.joints],
+    return {"qpos": [f"qpos:{j}" for j in s.joints], "qvel": [f"qvel:{s.joints[k]}" for k in sh.qvel_cols],
             "force": [f"force:{a}" for a in s.actuators]}
 
 

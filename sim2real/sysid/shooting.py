@@ -120,10 +120,22 @@ class Shooting:
         idx = self.tiles.start[:, None] + 1 + np.arange(H)[None]
         self.signals = {"qpos": q_all[idx]}
         scale = {"qpos": signal_scale([tr.sigma_q for tr in trajs], q_all, floor)}
+        # the measured velocity columns compared (all joints; ``qvel_cols``) and those left out
+        self.qvel_cols, self.left_out = np.arange(system.mj.nv), []
         if all(tr.qvel is not None for tr in trajs):
             qv = cat(lambda tr: tr.qvel)
-            self.signals["qvel"] = qv[idx]
-            scale["qvel"] = signal_scale([tr.sigma_qvel for tr in trajs], qv, floor)
+            # a measured velocity whose noise is as large as what it measures (an encoder's count
+            # differenced at a fast rate: noise at least 1/sqrt(2) of the column's spread, so the
+            # motion's own spread is below its noise) tells little about the motion, and weighted
+            # in it adds about one per residual to every model: every relative measure (a gain, a
+            # screen score, the held-out NRMSE) is diluted towards nothing. It is not compared.
+            noise = np.max([tr.sigma_qvel for tr in trajs], 0)
+            keep = noise < np.std(qv, 0) / np.sqrt(2)
+            self.left_out = [f"qvel:{system.joints[k]}" for k in np.where(~keep)[0]]
+            self.qvel_cols = np.where(keep)[0]
+            if keep.any():
+                self.signals["qvel"] = qv[idx][..., keep]
+                scale["qvel"] = signal_scale([tr.sigma_qvel[keep] for tr in trajs], qv[:, keep], floor)
         if m.nu and all(tr.force is not None for tr in trajs):
             fo = cat(lambda tr: tr.force)
             self.signals["force"] = fo[idx]
@@ -306,7 +318,9 @@ class Shooting:
             for key, val in res.items():
                 out.setdefault(key, []).append(np.asarray(val)[:b, : len(t)])
         self.seconds += time.perf_counter() - t0
-        return {key: np.concatenate(v, axis=1) for key, v in out.items()}
+        out = {key: np.concatenate(v, axis=1) for key, v in out.items()}
+        out["qvel"] = out["qvel"][..., self.qvel_cols]  # the columns compared (``qvel_cols``)
+        return out
 
     def residuals(self, pred: dict, tiles: np.ndarray) -> np.ndarray:
         """Weighted residuals ``[b, k, H * n_signals]`` (prediction minus measurement over the
