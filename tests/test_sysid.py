@@ -526,3 +526,24 @@ def test_bundled_real_recordings_load_against_their_models(folder, model):
     m = mujoco.MjModel.from_xml_path(os.path.join(base, model))
     recs = load_all(sorted(glob.glob(os.path.join(base, "*.csv"))), m)
     assert len(recs) >= 2
+
+
+def test_backlash_is_not_searched_on_an_integrating_servo(tmp_path):
+    """An ``intvelocity`` servo integrates its command: the backlash stage's force, passed as a
+    command, would be integrated as a velocity. No backlash candidate is made for it (a note
+    says so); the motor beside it still gets one."""
+    from sim2real.sysid.candidates import Scales, library
+    from sim2real.sysid.system import System
+
+    xml = tmp_path / "servo.xml"
+    xml.write_text("""<mujoco><option timestep="0.002"/><worldbody>
+      <body name="a"><joint name="j1" type="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/>
+        <body name="b" pos="0 0 -0.3"><joint name="j2" type="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.02" mass="0.2"/></body>
+      </body></worldbody>
+      <actuator><intvelocity name="iv" joint="j1" kp="20" actrange="-3 3"/><motor name="m2" joint="j2" gear="2"/></actuator></mujoco>""")
+    system = System(str(xml))
+    sc = Scales(force=np.ones(2), speed=np.ones(2), range=np.ones(2), act_force=np.ones(2), dt=0.01, max_delay=8,
+                inertia=np.full(2, 0.01))
+    backlash = [c.target for c in library(system, sc, ("backlash",))]
+    assert backlash == ["m2"]
+    assert any("backlash not searched on iv" in n for n in system.notes)

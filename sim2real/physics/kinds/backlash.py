@@ -49,7 +49,10 @@ class Backlash(Kind):
     impact, ``J`` small against the joint's own inertia) and the two then move together, the
     actuator's force reaching the joint, until it pulls away from the edge. The motor side is
     integrated implicitly (a stiff servo on a light rotor stays stable at any sub-step). Actuators
-    with activation dynamics pass the command through their filter after this stage.
+    with activation dynamics pass the command through their filter after this stage: a fast
+    filter delays the band's force a little; an integrator (``intvelocity``) would integrate it
+    as a velocity, and its law acts on the integrated setpoint, not on the command this stage
+    sees -- not modelled, so the diagnosis does not search a backlash there (``candidates``).
 
     MuJoCo clamps every command to its ``ctrlrange`` after the command path. The motor's own
     command is limited so, but the command this stage computes to pass a mesh force or an
@@ -173,6 +176,12 @@ class Backlash(Kind):
         m = system.mj
         an = system.actuators[target]
         j = int(m.actuator_trnid[target, 0])
+        if m.actuator_dyntype[target] == mujoco.mjtDyn.mjDYN_INTEGRATOR:
+            note = (f"backlash not searched on {an}: its command is integrated (an intvelocity servo), which the "
+                    "dead band's model does not hold")
+            if note not in system.notes:
+                system.notes.append(note)
+            return
         # the dead band's width, the inertia of the motor side that crosses it (a few percent of
         # the joint's own, unknown: fitted) and the mesh's stiffness: rigid, or the joint ringing
         # against it at tens of Hz (a gear train's compliance)
