@@ -547,3 +547,7 @@ def test_backlash_is_not_searched_on_an_integrating_servo(tmp_path):
     backlash = [c.target for c in library(system, sc, ("backlash",))]
     assert backlash == ["m2"]
     assert any("backlash not searched on iv" in n for n in system.notes)
+    # nor can one be set or randomised there: the bounds rule refuses it, saying why
+    assert system.spec["backlash:iv"].high == 0.0 and system.spec["backlash:m2"].high > 0.0
+    with pytest.raises(ValueError, match="outside its physical bounds.*integrating servo"):
+        system.spec.check_value("backlash:iv", 0.01)

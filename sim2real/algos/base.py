@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from sim2real.envs.base import Env
-from sim2real.physics.params import Subspace
+from sim2real.physics.params import Subspace, bounds_text
 
 
 @dataclasses.dataclass(frozen=True)
@@ -55,7 +55,7 @@ class DRSpace:
                 # checked, not clipped; a box that means to reach past the bounds (the LSDR paper's
                 # priors) says so with out_of_bounds=terminate, where impossible contexts end at once
                 raise ValueError(f"dr box for '{n}' [{lo}, {hi}] reaches outside its physical bounds "
-                                 f"[{p.low:g}, {p.high:g}] {p.unit}; keep it inside, or set "
+                                 f"{bounds_text(p)}; keep it inside, or set "
                                  "env_options.out_of_bounds=terminate (impossible contexts end their episode)")
         self.base = env.z_of(**{k: float(v) for k, v in cfg.fixed.items()})
         self.low = np.asarray(cfg.low, np.float32)

@@ -32,6 +32,12 @@ def _effects_on(attach: str) -> dict:
     return {kind: entry for k in kinds.attached(attach) for kind, entry in k.declares.items()}
 
 
+def _declared(m: mujoco.MjModel, i: int, kind: str, entry: tuple) -> tuple:
+    """``entry`` of ``kind`` as its plug-in declares it on object ``i`` (``Kind.declared``)."""
+    owner = next(k for k in kinds.all_kinds() if kind in k.declares)
+    return owner.declared(m, i, kind, entry)
+
+
 # Effect parameters per target: kind -> (default, low, high, unit, doc), from the kind plug-ins
 # (``physics/kinds/``); the library the diagnosis searches comes from the same plug-ins.
 JOINT_EFFECTS = _effects_on(kinds.JOINT)
@@ -60,7 +66,8 @@ def effect_params(m: mujoco.MjModel, joints, actuators, bodies) -> list[Param]:
             name = name_of(m, obj, i)
             j = i if obj == _JOINT else int(m.actuator_trnid[i, 0]) if obj == _ACT else -1
             slide = j >= 0 and m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
-            for kind, (d, lo, hi, unit, doc) in table.items():
+            for kind, entry in table.items():
+                d, lo, hi, unit, doc = _declared(m, i, kind, entry)
                 ps.append(Param(f"{kind}:{name}", d, lo, hi, unit_for(unit, slide), doc, kind, i))
     return ps
 

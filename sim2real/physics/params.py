@@ -119,10 +119,7 @@ class ParamSpec:
         if not np.isfinite(value):
             raise ValueError(f"physics parameter '{name}' = {value} is not finite")
         if not (p.low <= value <= p.high):
-            raise ValueError(
-                f"physics parameter '{name}' = {value} is outside its physical bounds "
-                f"[{p.low}, {p.high}] {p.unit}"
-            )
+            raise ValueError(f"physics parameter '{name}' = {value} is outside its physical bounds {bounds_text(p)}")
         return value
 
     def vector(self, values: Mapping[str, float] | None = None) -> np.ndarray:
@@ -145,16 +142,18 @@ class ParamSpec:
             i = int(np.argwhere(bad)[0][-1])
             v = z[..., i].ravel()[np.argmax(bad[..., i].ravel())]
             p = self.params[i]
-            raise ValueError(
-                f"{where}: parameter '{p.name}' = {v} is outside its physical bounds "
-                f"[{p.low}, {p.high}] {p.unit}"
-            )
+            raise ValueError(f"{where}: parameter '{p.name}' = {v} is outside its physical bounds {bounds_text(p)}")
         return z
 
     def describe(self) -> str:
         rows = [f"{p.name:32s} {p.default:>10.4g}  [{p.low:.4g}, {p.high:.4g}] {p.unit:8s} {p.doc}"
                 for p in self.params]
         return "\n".join(rows)
+
+
+def bounds_text(p: Param) -> str:
+    """``p``'s bounds as the errors state them (with why, where they allow one value only)."""
+    return f"[{p.low:g}, {p.high:g}] {p.unit}" + (f" ({p.doc})" if p.low == p.high else "")
 
 
 def clip(spec: ParamSpec, z: jnp.ndarray) -> jnp.ndarray:

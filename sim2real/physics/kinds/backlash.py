@@ -52,7 +52,8 @@ class Backlash(Kind):
     with activation dynamics pass the command through their filter after this stage: a fast
     filter delays the band's force a little; an integrator (``intvelocity``) would integrate it
     as a velocity, and its law acts on the integrated setpoint, not on the command this stage
-    sees -- not modelled, so the diagnosis does not search a backlash there (``candidates``).
+    sees -- not modelled: the width's bounds there are [0, 0] (``declared``), and the
+    diagnosis does not search a backlash there (``candidates``).
 
     MuJoCo clamps every command to its ``ctrlrange`` after the command path. The motor's own
     command is limited so, but the command this stage computes to pass a mesh force or an
@@ -69,6 +70,13 @@ class Backlash(Kind):
     effect = "backlash"
     candidate_order = 64
     command_order = 30
+
+    def declared(self, m, index, kind, entry):
+        # on an integrating servo the band is not modelled (class docstring): only 0 is allowed
+        if kind == "backlash" and m.actuator_dyntype[index] == mujoco.mjtDyn.mjDYN_INTEGRATOR:
+            d, lo, hi, unit, doc = entry
+            return d, lo, d, unit, doc + " (0 on an integrating servo, where the band is not modelled)"
+        return entry
 
     def setup(self, pm) -> None:
         # only the MJX model: native runs of the same model get raw commands, which MuJoCo clamps

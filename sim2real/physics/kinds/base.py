@@ -57,6 +57,12 @@ class Kind:
     candidate_order: float | None = None
     default_candidate: bool = True
 
+    def declared(self, m: mujoco.MjModel, index: int, kind: str, entry: tuple) -> tuple:
+        """``declares[kind]`` as declared on object ``index`` of ``m``: a kind whose model does
+        not hold on some objects narrows the bounds there to the neutral value, so a value or a
+        randomisation range that asks for it is refused by the bounds rule (``physics/params.py``)."""
+        return entry
+
     # ---------------------------------------------------------------- model ------------
     def prepare(self, m: mujoco.MjModel, spec) -> mujoco.MjModel:
         """The compiled model with any structural change this kind needs (copy before changing)."""
