@@ -687,7 +687,8 @@ def _nrmse(sh: Shooting, fitter: Fitter, zs, tiles) -> list[tuple[dict, dict]]:
 
 def _signal_names(sh: Shooting) -> dict:
     s = sh.sys
-    return {"qpos": [f"qpos:{j}" for j in s.joints], "qvel": [f"qvel:{s.joints[k]}" for k in sh.qvel_cols],
+    cols = range(len(s.joints)) if sh.qvel_cols is None else sh.qvel_cols
+    return {"qpos": [f"qpos:{j}" for j in s.joints], "qvel": [f"qvel:{s.joints[k]}" for k in cols],
             "force": [f"force:{a}" for a in s.actuators]}
 
 

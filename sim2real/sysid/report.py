@@ -33,7 +33,7 @@ def overlay(path, sh, tiles, pred_b, pred_a, traj_index, names, units):
     fig, axes = plt.subplots(2 * len(rows), 1, figsize=(9, 2.3 * len(rows) + 0.8), squeeze=False,
                              gridspec_kw={"height_ratios": [3, 1.3] * len(rows)}, sharex=True)
     for r, (key, k, nm) in enumerate(rows):
-        meas = {"qpos": tr.q, "qvel": tr.qvel[:, sh.qvel_cols] if key == "qvel" else None, "force": tr.force}[key][:, k]
+        meas = {"qpos": tr.q, "qvel": tr.qvel, "force": tr.force}[key][:, sh.qvel_cols[k] if key == "qvel" else k]
         nb, na = _stitch(sh, pred_b, tiles, key, k, traj_index), _stitch(sh, pred_a, tiles, key, k, traj_index)
         ax, ax2 = axes[2 * r, 0], axes[2 * r + 1, 0]
         ax.plot(tr.time, meas, "k", lw=1.1, label="measured")

@@ -120,8 +120,8 @@ class Shooting:
         idx = self.tiles.start[:, None] + 1 + np.arange(H)[None]
         self.signals = {"qpos": q_all[idx]}
         scale = {"qpos": signal_scale([tr.sigma_q for tr in trajs], q_all, floor)}
-        # the measured velocity columns compared (all joints; ``qvel_cols``) and those left out
-        self.qvel_cols, self.left_out = np.arange(system.mj.nv), []
+        # the measured velocity columns compared (None: the recordings have none) and those left out
+        self.qvel_cols, self.left_out = None, []
         if all(tr.qvel is not None for tr in trajs):
             qv = cat(lambda tr: tr.qvel)
             # a measured velocity whose noise is as large as what it measures (an encoder's count
@@ -319,7 +319,8 @@ class Shooting:
                 out.setdefault(key, []).append(np.asarray(val)[:b, : len(t)])
         self.seconds += time.perf_counter() - t0
         out = {key: np.concatenate(v, axis=1) for key, v in out.items()}
-        out["qvel"] = out["qvel"][..., self.qvel_cols]  # the columns compared (``qvel_cols``)
+        if self.qvel_cols is not None:  # only the measured columns compared
+            out["qvel"] = out["qvel"][..., self.qvel_cols]
         return out
 
     def residuals(self, pred: dict, tiles: np.ndarray) -> np.ndarray:

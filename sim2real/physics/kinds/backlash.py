@@ -184,7 +184,7 @@ class Backlash(Kind):
         m = system.mj
         an = system.actuators[target]
         j = int(m.actuator_trnid[target, 0])
-        if m.actuator_dyntype[target] == mujoco.mjtDyn.mjDYN_INTEGRATOR:
+        if system.spec[f"backlash:{an}"].high <= 0:  # (``declared``: an integrating servo)
             note = (f"backlash not searched on {an}: its command is integrated (an intvelocity servo), which the "
                     "dead band's model does not hold")
             if note not in system.notes:
