@@ -245,8 +245,10 @@ def _selector(fits):
     sel.__dict__.update(_Stub(fits).__dict__)
 
     def fit(effects, z0, v0, extra=()):
-        phi, val = fits[frozenset(c.label for c in effects)]
-        res = Result(np.zeros(1), np.zeros((1, 1)), [], {}, phi, phi, 1000, [], 1)
+        phi, val = fits[frozenset(c.label for c in effects)][:2]
+        # the fitted segments' own misfit (``Result.sse``) is what a test sets, else none
+        sse = fits[frozenset(c.label for c in effects)][2] if len(fits[frozenset(c.label for c in effects)]) > 2 else 0.0
+        res = Result(np.zeros(1), np.zeros((1, 1)), [], {}, phi, sse, 1000, [], 1)
         return Model(list(effects), res, np.asarray(val, float), [])
 
     sel.fit = fit
@@ -329,6 +331,29 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     # above the floor no finer simulation is needed
     sel.step_level = 0.01
     assert sel._accept(M, C, first=True)[0] and calls == [2, 2]
+
+
+def test_a_model_missing_its_fitted_segments_is_judged_though_its_validation_tail_is_calm():
+    """``Selector.level``: the floors look at the larger of the validation misfit and the fitted
+    segments' own. A policy's episode swings up, then balances: the balancing tail (validation)
+    can sit below the floor while the model misses the swings by far more; a delay that cuts
+    the tail's error 5-fold with a large t is then judged, not stopped by the floor."""
+    from sim2real.sysid.candidates import Candidate
+
+    D = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+    rng = np.random.default_rng(2)
+    calm = 0.1 + rng.uniform(0, 0.02, 10)              # about 0.001 per residual (100 per segment)
+    fits = {frozenset(): (5000.0, calm, 0.0), frozenset({"action_delay"}): (400.0, calm / 5, 0.0)}
+    sel, fit = _selector(fits)
+    sel.cfg = dataclasses.replace(sel.cfg, floor_level=0.003, floor_step=2.0, finer=0)
+    sel.step_level = 0.5
+    M, C = fit([], 0, 0), fit([D], 0, 0)
+    assert sel.level(M) < 0.003 and not sel._accept(M, C, first=True)[0]   # calm everywhere: the floor stops it
+    fits[frozenset()] = (5000.0, calm, 4000.0)          # the fitted segments missed by 4 per residual
+    M = fit([], 0, 0)
+    assert sel.level(M) == 4.0 and sel._accept(M, C, first=True)[0]
+    # at another step (``val`` given) the validation alone counts: the fit is not re-run there
+    assert sel.level(M, calm) < 0.003
 
 
 def test_the_first_effect_needs_a_smaller_gain_than_the_ones_after_it():

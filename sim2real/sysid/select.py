@@ -107,8 +107,9 @@ class SelectConfig:
         gain there names a false second effect: tuning half, a delay beside a sensor offset) ...
       min_t: ... with a paired t-statistic over the validation segments at least this large ...
       floor_level: ... and, unless its gain is ``strong``, the model it extends must misfit the
-        validation data by more than this: its validation objective per residual (residuals are
-        in units of each signal's noise, at least 1% of its spread) ...
+        data by more than this: its validation objective per residual, or its fitted segments'
+        if larger (``Selector.level``; residuals are in units of each signal's noise, at least 1%
+        of its spread) ...
       floor_step: ... and by more than this many times the misfit the physics step alone causes
         (``step_level``, measured per diagnosis by ``diagnose.discretization_level``). A model
         whose remaining misfit the step's own error could explain has nothing left that an
@@ -326,10 +327,20 @@ class Selector:
         return ratio, max(_paired_t(a - b), _paired_t(np.log((a + floor) / (b + floor))))
 
     def level(self, M: Model, val=None) -> float:
-        """Validation objective of ``M`` (or ``val``, its per-segment values at another step) per
-        residual (1: the model misfits by the data's precision)."""
+        """How much ``M`` misfits, per residual (1: by the data's precision): the larger of its
+        validation objective and its fitted segments' own (the data part of the fit's objective);
+        with ``val`` (its per-segment validation values at another step) that alone.
+
+        The fitted segments count too because a recording need not be alike throughout: a
+        policy's episode swings up, then balances, and its validation tail (the balancing) can
+        sit far below the floors while the model misses the swings by thousands of times the
+        noise (the pendulum of ``benchmarks/closed_loop.py``: a 6-sample delay, t = 44 on the
+        tail, was stopped by the floor). On the 216 cases of the independent benchmark's two
+        tuning lists (recordings alike throughout) it is the larger in 36% of the trials, mostly
+        by a little, and no answer changed (``tuning.md`` step 34)."""
         n = max(M.result.n / max(len(self.fit_tiles), 1), 1) * len(self.val_tiles)
-        return float(np.sum(M.val if val is None else val) / n)
+        lv = float(np.sum(M.val if val is None else val) / n)
+        return lv if val is not None else max(lv, float(M.result.sse) / max(M.result.n, 1))
 
     def _passes(self, ratio, t, level=float("inf"), first=False, step_level=None) -> bool:
         """The test of a model against the one it extends (``first``: that one has no effect);
