@@ -245,9 +245,9 @@ def _selector(fits):
     sel.__dict__.update(_Stub(fits).__dict__)
 
     def fit(effects, z0, v0, extra=()):
-        phi, val = fits[frozenset(c.label for c in effects)][:2]
-        # the fitted segments' own misfit (``Result.sse``) is what a test sets, else none
-        sse = fits[frozenset(c.label for c in effects)][2] if len(fits[frozenset(c.label for c in effects)]) > 2 else 0.0
+        entry = fits[frozenset(c.label for c in effects)]
+        phi, val = entry[:2]
+        sse = entry[2] if len(entry) > 2 else 0.0   # the fitted segments' own misfit, where a test sets it
         res = Result(np.zeros(1), np.zeros((1, 1)), [], {}, phi, sse, 1000, [], 1)
         return Model(list(effects), res, np.asarray(val, float), [])
 
