@@ -34,8 +34,7 @@ def _effects_on(attach: str) -> dict:
 
 def _declared(m: mujoco.MjModel, i: int, kind: str, entry: tuple) -> tuple:
     """``entry`` of ``kind`` as its plug-in declares it on object ``i`` (``Kind.declared``)."""
-    owner = next(k for k in kinds.all_kinds() if kind in k.declares)
-    return owner.declared(m, i, kind, entry)
+    return kinds.owner(kind).declared(m, i, kind, entry)
 
 
 # Effect parameters per target: kind -> (default, low, high, unit, doc), from the kind plug-ins

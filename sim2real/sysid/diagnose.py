@@ -688,7 +688,7 @@ def _nrmse(sh: Shooting, fitter: Fitter, zs, tiles) -> list[tuple[dict, dict]]:
 
 def _signal_names(sh: Shooting) -> dict:
     s = sh.sys
-    cols = range(len(s.joints)) if sh.qvel_cols is None else sh.qvel_cols
+    cols = () if sh.qvel_cols is None else sh.qvel_cols  # (None: no qvel signal, so no names read)
     return {"qpos": [f"qpos:{j}" for j in s.joints], "qvel": [f"qvel:{s.joints[k]}" for k in cols],
             "force": [f"force:{a}" for a in s.actuators]}
 

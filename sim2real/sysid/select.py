@@ -335,9 +335,10 @@ class Selector:
         policy's episode swings up, then balances, and its validation tail (the balancing) can
         sit far below the floors while the fitted segments (the swings) are missed by far more
         (the pendulum of ``benchmarks/closed_loop.py``: after its friction, 0.0015 per residual on
-        the tail, 30-70 on the swings; a 6-sample delay with t = 44 was stopped by the floor). On the 216 cases of the independent benchmark's two
-        tuning lists (recordings alike throughout) it is the larger in 36% of the trials, mostly
-        by a little, and no answer changed (``tuning.md`` step 34)."""
+        the tail, 30-70 on the swings; a 6-sample delay with t = 44 was stopped by the floor).
+        On the 216 cases of the independent benchmark's two tuning lists (recordings alike
+        throughout) it is the larger in 36% of the trials, mostly by a little, and no answer
+        changed (``tuning.md`` step 34)."""
         n = max(M.result.n / max(len(self.fit_tiles), 1), 1) * len(self.val_tiles)
         lv = float(np.sum(M.val if val is None else val) / n)
         return lv if val is not None else max(lv, float(M.result.sse) / max(M.result.n, 1))
