@@ -5,6 +5,7 @@ import importlib.util
 import json
 import os
 import sys
+import types
 
 import mujoco
 import numpy as np
@@ -235,6 +236,22 @@ class _Stub:
         self.fit_tiles, self.val_tiles = np.arange(10), np.arange(10, 20)
         self.pruned, self.step_level, self.progress = [], 0.0, lambda text: None
         self._finer, self._fine = None, None
+        # one parameter vector entry (an effect's own value, where a test sets it); 1 ms samples and steps
+        self.spec = types.SimpleNamespace(index=lambda name: 0)
+        self.f = types.SimpleNamespace(sh=types.SimpleNamespace(dt=0.001, sys=types.SimpleNamespace(h=0.001)))
+
+
+class _Fine:
+    """The same segments simulated at the finer step: their validation values are ``at_finer``."""
+
+    v_hat = None
+
+    def __init__(self, at_finer, calls):
+        self.at_finer, self.calls = at_finer, calls
+
+    def velocities_many(self, zs, v0s, tiles):
+        self.calls.append(len(zs))
+        return [(None, v) for v in self.at_finer]
 
 
 def _selector(fits):
@@ -248,7 +265,8 @@ def _selector(fits):
         entry = fits[frozenset(c.label for c in effects)]
         phi, val = entry[:2]
         sse = entry[2] if len(entry) > 2 else 0.0   # the fitted segments' own misfit, where a test sets it
-        res = Result(np.zeros(1), np.zeros((1, 1)), [], {}, phi, sse, 1000, [], 1)
+        z = np.array([entry[3] if len(entry) > 3 else 0.0])   # the effect's fitted value, where a test sets it
+        res = Result(z, np.zeros((1, 1)), [], {}, phi, sse, 1000, [], 1)
         return Model(list(effects), res, np.asarray(val, float), [])
 
     sel.fit = fit
@@ -309,21 +327,10 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     sel.step_level = 0.5                                   # the base misfits by 0.04 per residual
     M, C = fit([], 0, 0), fit([A], 0, 0)
     calls = []
-
-    class Fine:                                            # the same segments at the finer step
-        v_hat = None
-
-        def __init__(self, at_finer):
-            self.at_finer = at_finer
-
-        def velocities_many(self, zs, v0s, tiles):
-            calls.append(len(zs))
-            return [(None, v) for v in self.at_finer]
-
-    sel._finer = lambda k: (Fine([base, half * 1.05]), 0.001)     # the gain stays: named
+    sel._finer = lambda k: (_Fine([base, half * 1.05], calls), 0.001)     # the gain stays: named
     ok, ratio, t, note = sel._accept(M, C, first=True)
     assert ok and ratio < 0.6 and "4x finer step" in note and "passes" in note
-    sel._fine, sel._finer = None, lambda k: (Fine([base * 0.5, half]), 0.001)   # the gain was the step's
+    sel._fine, sel._finer = None, lambda k: (_Fine([base * 0.5, half], calls), 0.001)   # the gain was the step's
     assert not sel._accept(M, C, first=True)[0]
     sel._fine, sel.cfg = None, dataclasses.replace(sel.cfg, finer=0)   # off: the floor decides
     assert not sel._accept(M, C, first=True)[0]
@@ -331,6 +338,33 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     # above the floor no finer simulation is needed
     sel.step_level = 0.01
     assert sel._accept(M, C, first=True)[0] and calls == [2, 2]
+
+
+def test_a_delay_shorter_than_one_physics_step_is_judged_again_at_a_finer_step():
+    """``Selector._within_one_step``: a delay of 0.4 samples (1 ms samples, 1 ms physics steps)
+    that halves the validation error far above every floor is still what an integrator's phase
+    error looks like: it is judged again at the finer step, named only if it keeps its gain
+    there. A delay of 3 samples is not simulated again."""
+    from sim2real.sysid.candidates import Candidate
+
+    D = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+    rng = np.random.default_rng(3)
+    base, better = 40 + rng.uniform(0, 4, 10), 20 + rng.uniform(0, 2, 10)
+    fits = {frozenset(): (5000.0, base), frozenset({"action_delay"}): (3000.0, better, 0.0, 0.4)}
+    sel, fit = _selector(fits)
+    sel.cfg = dataclasses.replace(sel.cfg, floor_level=0.0, floor_step=1.0, finer=4)
+    sel.step_level = 1e-4                                  # the base misfits 400 times above the floor
+    M, C = fit([], 0, 0), fit([D], 0, 0)
+    calls = []
+    sel._finer = lambda k: (_Fine([base, base * 1.01], calls), 1e-5)    # the gain goes with the step
+    ok, ratio, t, note = sel._accept(M, C, first=False)
+    assert not ok and ratio < 0.6 and "0.4 ms, shorter than the 1 ms physics step" in note and note.endswith("fails")
+    sel._fine, sel._finer = None, lambda k: (_Fine([base, better * 1.05], calls), 1e-5)   # it stays: named
+    assert sel._accept(M, C, first=False)[0] and calls == [2, 2]
+    fits[frozenset({"action_delay"})] = (3000.0, better, 0.0, 3.0)      # three samples: judged as it is
+    assert sel._accept(M, fit([D], 0, 0), first=False)[0] and calls == [2, 2]
+    sel._fine, sel.cfg = None, dataclasses.replace(sel.cfg, finer=0)    # the check off: the floors decide
+    assert sel._accept(M, C, first=False)[0] and calls == [2, 2]
 
 
 def test_a_model_missing_its_fitted_segments_is_judged_though_its_validation_tail_is_calm():
