@@ -234,7 +234,7 @@ class _Stub:
         self.fits = fits                # {frozenset of effect labels: (phi, per-segment validation)}
         self.cfg = SelectConfig()
         self.fit_tiles, self.val_tiles = np.arange(10), np.arange(10, 20)
-        self.pruned, self.step_level, self.progress = [], 0.0, lambda text: None
+        self.pruned, self.step_level, self.progress, self.units = [], 0.0, lambda text: None, []
         self._finer, self._fine = None, None
         # one parameter vector entry (an effect's own value, where a test sets it); 1 ms samples and steps
         self.spec = types.SimpleNamespace(index=lambda name: 0)
@@ -298,6 +298,36 @@ def test_backward_check_drops_an_effect_a_later_one_made_redundant():
     sel, fit = _selector(fits)
     M, path = sel._prune(steps[-1], steps)
     assert [c.label for c in M.effects] == ["viscous_damping@j", "motor_lag@j"] and path is steps
+
+
+def test_a_pair_that_joined_together_is_judged_as_one_by_the_backward_check():
+    """``Selector._units``: two effects that only together explained the data (``_pair``) are
+    checked against the model without both. One by one, the delay's contribution beside the
+    friction sits in one validation segment (t = 1), so it would be dropped and the friction
+    left alone, which had already failed on the nominal model; as one unit both stay."""
+    from sim2real.sysid.candidates import Candidate
+
+    F = Candidate("coulomb_friction", "j", ("coulomb:j",), ((0.1,),), (1.0,), ((0.0, 1.0),))
+    D = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+    good = np.full(10, 10.0)
+    fits = {frozenset(): (5000.0, np.r_[1000.0, np.full(9, 20.0)]),
+            frozenset({"coulomb_friction@j"}): (4000.0, np.r_[1000.0, np.full(9, 10.0)]),
+            frozenset({"action_delay"}): (4500.0, np.r_[1000.0, np.full(9, 19.0)]),
+            frozenset({"coulomb_friction@j", "action_delay"}): (1000.0, good)}
+    sel, fit = _selector(fits)
+    steps = [fit([], 0, 0), fit([F], 0, 0), fit([F, D], 0, 0)]
+    M, path = sel._prune(steps[-1], steps)                    # judged one by one: the delay goes
+    assert [c.label for c in M.effects] == ["coulomb_friction@j"] and "action_delay was dropped" in sel.pruned[0]
+    sel, fit = _selector(fits)
+    sel.units = [frozenset({"coulomb_friction@j", "action_delay"})]
+    M, path = sel._prune(steps[-1], steps)                    # one unit: it passes against none
+    assert [c.label for c in M.effects] == ["coulomb_friction@j", "action_delay"] and path is steps and not sel.pruned
+    # a unit that fails against the model without both goes as one
+    fits[frozenset({"coulomb_friction@j", "action_delay"})] = (1000.0, np.r_[1000.0, np.full(9, 20.0)])
+    sel, fit = _selector(fits)
+    sel.units = [frozenset({"coulomb_friction@j", "action_delay"})]
+    M, path = sel._prune(fit([F, D], 0, 0), steps)
+    assert M.effects == [] and "coulomb_friction@j + action_delay were dropped" in sel.pruned[0]
 
 
 def test_no_effect_is_named_on_a_misfit_the_physics_step_can_explain():
