@@ -365,7 +365,7 @@ class Selector:
         if not C.result.phi < M.result.phi:
             return False, ratio, t, ""
         if self._passes(ratio, t, level, first):
-            if (short := self._within_one_step(C)) and self.cfg.finer >= 2 and self._finer is not None:
+            if (short := self._within_one_step(M, C)) and self.cfg.finer >= 2 and self._finer is not None:
                 ok, note = self._finer_passes(M, C, first, short)
                 return ok, ratio, t, note
             return True, ratio, t, ""
@@ -374,23 +374,24 @@ class Selector:
             return ok, ratio, t, note
         return False, ratio, t, ""
 
-    def _within_one_step(self, C: Model) -> str:
-        """Why ``C`` is judged at the ``finer`` step too, whatever the floors say ("" if not): its
-        newest effect is a delay or a lag shorter than one physics step. An integrator shifts what
-        it simulates by a fraction of its step (semi-implicit Euler's phase error is about half of
-        one), so a timing effect that small may be that shift taken up, on data precise enough to
-        show it (the independent benchmark's extra list: a 0.4 ms delay at 1 ms steps named beside
-        a sensor offset on noiseless 1 kHz data, ``tuning.md`` step 35)."""
-        c = C.effects[-1] if C.effects else None
-        if c is None or c.effect not in ("action_delay", "motor_lag"):
-            return ""
-        v = float(C.z[self.spec.index(c.params[0])])
-        seconds = v * self.f.sh.dt if c.effect == "action_delay" else v  # the delay is in samples
+    def _within_one_step(self, M: Model, C: Model) -> str:
+        """Why ``C`` is judged against ``M`` at the ``finer`` step too, whatever the floors say (""
+        if not): an effect ``C`` adds is a delay or a lag shorter than one physics step. An
+        integrator shifts what it simulates by a fraction of its step (semi-implicit Euler's phase
+        error is about half of one), so a timing effect that small may be that shift taken up, on
+        data precise enough to show it (the independent benchmark's extra list: a 0.4 ms delay at
+        1 ms steps named beside a sensor offset on noiseless 1 kHz data, ``tuning.md`` step 35)."""
         h = self.f.sh.sys.h
-        if not 0.0 < seconds < h:
-            return ""
-        kind = "delay" if c.effect == "action_delay" else "lag"
-        return f"a {kind} of {seconds * 1e3:.3g} ms, shorter than the {h * 1e3:.3g} ms physics step"
+        have = {e.label for e in M.effects}
+        for c in C.effects:
+            if c.label in have or c.effect not in ("action_delay", "motor_lag"):
+                continue
+            v = float(C.z[self.spec.index(c.params[0])])
+            seconds = v * self.f.sh.dt if c.effect == "action_delay" else v  # the delay is in samples
+            if 0.0 < seconds < h:
+                kind = "delay" if c.effect == "action_delay" else "lag"
+                return f"a {kind} of {seconds * 1e3:.3g} ms, shorter than the {h * 1e3:.3g} ms physics step"
+        return ""
 
     def _finer_passes(self, M: Model, C: Model, first: bool, why: str = "") -> tuple[bool, str]:
         """``C`` lowers the validation error of a model ``M`` that already misfits by no more than
@@ -642,7 +643,7 @@ class Selector:
             self.progress(f"checking that each effect of {M.label} is still needed")
             worst = None
             for unit in self._units(M):
-                R = self._without_all(M, unit) if len(unit) > 1 else self._without(M, unit[0])
+                R = self._without_all(M, unit)
                 ok, ratio, t, _ = self._accept(R, M, not R.effects)
                 if not ok and (worst is None or ratio > worst[1]):
                     worst = (unit, ratio, t, R)
