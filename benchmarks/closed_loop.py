@@ -43,6 +43,7 @@ import time
 import numpy as np
 
 from sim2real.common.cli import settings
+from sim2real.common.config import ConfigError
 from sim2real.sysid.recordings import RecordingError
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -243,6 +244,9 @@ def main(args: Settings):
             except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
                 _not_run("diag_dr_1", s, f"the diagnosis refused the nominal policy's recordings ({e})")
                 continue
+            except ConfigError as e:  # the training refuses the diagnosis: one seed lost, not the run
+                _not_run("diag_dr_1", s, f"the retraining refused the diagnosis ({e})")
+                continue
             diagnoses[f"seed{s}_iter1"] = it1["diagnosis"]
             r1 += _scores(it1["run"], plant, args.episodes, 1)
             s1.append(s)
@@ -252,6 +256,9 @@ def main(args: Settings):
                                          seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start)
                 except RecordingError as e:
                     _not_run("diag_dr_2", s, f"the diagnosis refused the first loop's recordings ({e})")
+                    continue
+                except ConfigError as e:
+                    _not_run("diag_dr_2", s, f"the retraining refused the diagnosis ({e})")
                     continue
                 diagnoses[f"seed{s}_iter2"] = it2["diagnosis"]
                 r2 += _scores(it2["run"], plant, args.episodes, 1)

@@ -509,6 +509,13 @@ def test_targets_restrict_the_search_and_unknown_ones_are_refused(tmp_path):
                                 effects=("none", "coulomb_friction", "motor_lag", "action_delay")))
     searched = {(e["effect"], e["target"]) for e in d["effects"]}
     assert searched == {("motor_lag", "motor"), ("action_delay", "")}, searched
+    # ``expressible``: an effect needing a parameter outside the list is not searched, and the report says so
+    d = diagnose(DiagnoseConfig(model=PENDULUM, recordings=(paths[0],), heldout=(paths[1],), out=str(tmp_path / "x"),
+                                plots=False, progress=False, effects=("none", "motor_lag", "backlash", "mass_offset"),
+                                expressible=("motor_lag:motor", "backlash:motor", "payload:pole")))
+    searched = {(e["effect"], e["target"]) for e in d["effects"]}
+    assert searched == {("motor_lag", "motor")}, searched
+    assert any("not searched" in n and "backlash@motor" in n and "mass_offset@pole" in n for n in d["notes"]), d["notes"]
     with pytest.raises(ValueError, match=r"targets: \['hinj'\] name no joint, actuator or body.*hinge"):
         diagnose(DiagnoseConfig(model=PENDULUM, recordings=(paths[0],), out=str(tmp_path / "e"), plots=False,
                                 progress=False, targets=("hinj",)))

@@ -56,6 +56,10 @@ class DiagnoseConfig:
         global effects (``action_delay``) are always searched. The loop passes those its
         training env can express (an env that randomises its actuated joints only has no
         counterpart for an effect on a free root joint).
+      expressible: parameter names an effect may use (default: any); an effect needing another
+        is not searched, and the report says so. The loop passes its training env's physics, so
+        nothing is named that the env could not simulate (a payload at a fitted distance along
+        a link, a backlash's motor-side inertia).
       window_seconds: Savitzky-Golay window for velocity estimates (0: chosen from the noise).
       horizon_seconds: length of the multiple-shooting predictions (0: chosen from the data).
       val_fraction: tail of each training recording held back to judge candidates.
@@ -111,6 +115,7 @@ class DiagnoseConfig:
     overwrite: bool = False
     effects: tuple[str, ...] = EFFECTS
     targets: tuple[str, ...] = ()
+    expressible: tuple[str, ...] = ()
     window_seconds: float = 0.0
     horizon_seconds: float = 0.0
     val_fraction: float = 0.3
@@ -505,13 +510,21 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         cands = library(system, sc, tuple(cfg.effects))
         if cfg.targets:
             cands = [c for c in cands if not c.target or c.target in cfg.targets]
+        if cfg.expressible:
+            allowed = set(cfg.expressible)
+            left = sorted({c.label for c in cands if not set(c.params) <= allowed})
+            cands = [c for c in cands if set(c.params) <= allowed]
+            if left:
+                system.notes.append("not searched, their parameters not among those allowed (`expressible`): "
+                                    + ", ".join(left))
         bar.step(text="fitting")
         sel = Selector(fitter, system.nominal, cands,
                        SelectConfig(min_gain=cfg.min_gain, min_t=cfg.min_t, min_gain_first=cfg.min_gain_first,
                                     floor_level=cfg.floor_level, strong=cfg.strong, top=cfg.top,
                                     max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer,
                                     plausible_masses=cfg.plausible_masses),
-                       progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer)
+                       progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
+                       allowed=cfg.expressible or None)
         final, steps = sel.run()
         bar.step(text="checking on held-out data")
         # held-out check: nothing is kept that predicts held-out data worse than the nominal model

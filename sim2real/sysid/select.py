@@ -165,12 +165,15 @@ class Selector:
     """Forward selection over ``candidates`` with ``fitter`` on the fit/validation segments."""
 
     def __init__(self, fitter: Fitter, nominal: list[str], candidates: list[Candidate], cfg: SelectConfig,
-                 progress=None, step_level: float = 0.0, finer=None):
+                 progress=None, step_level: float = 0.0, finer=None, allowed=None):
         """``finer(k)``: the fitter of the same segments with a physics step ``k`` times shorter and
-        that step's ``step_level``, or None where none can be built (``SelectConfig.finer``)."""
+        that step's ``step_level``, or None where none can be built (``SelectConfig.finer``);
+        ``allowed``: the parameter names an effect may use (None: any; ``DiagnoseConfig.expressible``),
+        which decides whether a friction may get a level per direction."""
         self.f, self.nominal, self.cands, self.cfg = fitter, list(nominal), list(candidates), cfg
         self.step_level = float(step_level)
         self._finer, self._fine = finer, None
+        self.allowed = None if allowed is None else set(allowed)
         sh = fitter.sh
         self.fit_tiles, self.val_tiles = sh.tiles.of("fit"), sh.tiles.of("val")
         self.spec = sh.sys.spec
@@ -454,6 +457,8 @@ class Selector:
         c = trial.candidate
         jn = c.target
         name = f"coulomb_asym:{jn}"
+        if self.allowed is not None and name not in self.allowed:
+            return trial
         asym = dataclasses.replace(c, params=c.params + (name,), grid=(c.grid[0] + (0.0,),),
                                    scales=c.scales + (0.3,), search=c.search + ((-0.95, 0.95),))
         C = self.fit(M.effects + [asym], trial.model.z, trial.model.result.v0)

@@ -94,12 +94,15 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
     paths = save(rolls, what, os.path.join(out, "recordings"))
     model = env_model_path(env_class(base.env))
     # only effects the training env can express: its physics names them as ``kind:target`` (the
-    # targets are names in its own MJCF, which the diagnosis checks)
-    env_targets = sorted({n.split(":", 1)[1] for n in make(base.env, **dict(base.env_options)).spec.names if ":" in n})
+    # targets are names in its own MJCF, which the diagnosis checks), and every parameter of an
+    # effect must be one of its physics' (a payload at a fitted distance along the pole, or a
+    # backlash's motor-side inertia, which ``dr.from_diagnosis`` would refuse, is not searched)
+    env_names = make(base.env, **dict(base.env_options)).spec.names
+    env_targets = sorted({n.split(":", 1)[1] for n in env_names if ":" in n})
     dcfg = config_lib.load(DiagnoseConfig, [f"model={model}", f"recordings=[{','.join(paths[:-1])}]",
                                             f"heldout=[{paths[-1]}]", f"out={os.path.join(out, 'diagnosis')}",
                                             f"progress={str(progress).lower()}"] + list(diagnose_options))
-    dcfg = dataclasses.replace(dcfg, targets=tuple(env_targets))
+    dcfg = dataclasses.replace(dcfg, targets=tuple(env_targets), expressible=tuple(env_names))
     d = diagnose(dcfg)
     cfg = dataclasses.replace(base, name="run", out_dir=out, resume=False, overwrite=False, progress=progress,
                               dr=dataclasses.replace(base.dr, from_diagnosis=os.path.join(out, "diagnosis")))
