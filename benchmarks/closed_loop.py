@@ -15,7 +15,8 @@ effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim
 - ``simopt``: SimOpt from the same 3 recordings (``real=recordings``, one iteration: REPS on the
   recordings, then retraining), adapting Coulomb friction and delay from the nominal physics;
 - ``diag_dr_1``: the loop, once (``sim2real/tools/loop.py``: record 3 episodes of the nominal policy,
-  diagnose, retrain with ``dr.from_diagnosis``);
+  diagnose, retrain with ``dr.from_diagnosis``; where the diagnosis is unusable -- inconclusive,
+  or masses re-fitted more than 10x off -- retrain on the ``wide`` box instead: ``LoopConfig.fallback``);
 - ``diag_dr_2``: the loop twice (record again with the new policy, diagnose again, retrain).
 - ``oracle_ft``: the oracle's physics, fine-tuned from each seed's nominal policy (the fair upper
   bound for the loop with ``loop_warm_start=true``: the same steps, the same start).
@@ -108,7 +109,9 @@ class Settings:
     is still trained for all, so seed s is the same chain in every call), to split a long
     benchmark over several calls with merge=true; device: where it ran, for the summary;
     loop_warm_start: the loop fine-tunes the recorded policy (``oracle_ft`` is its fair
-    comparison); config_set: extra training settings for every method, ``key=value`` separated by
+    comparison); loop_fallback: a loop iteration whose diagnosis is unusable (inconclusive, or
+    masses re-fitted > 10x off) trains on the ``wide`` box instead (``loop.unusable``; false: on
+    the diagnosis anyway, as before 2026-11-27's twelfth session); config_set: extra training settings for every method, ``key=value`` separated by
     ``;`` (e.g. ``ppo.num_envs=1024;ppo.num_minibatches=16``)."""
     env: str = "pendulum"
     seeds: int = 3
@@ -121,6 +124,7 @@ class Settings:
     only_seeds: str = ""
     device: str = "2 CPU cores"
     loop_warm_start: bool = False
+    loop_fallback: bool = True
     config_set: str = ""
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
@@ -182,16 +186,12 @@ def main(args: Settings):
         add("oracle_ft", _scores(r, plant, args.episodes, S))
     if "udr_wide" in methods:
         t = time.time()
-        w = setup["wide"]
-        r = _train(base, "udr_wide", work, num_seeds=S, dr=DRConfig(params=tuple(w), low=tuple(v[0] for v in w.values()),
-                                                                   high=tuple(v[1] for v in w.values())))
+        r = _train(base, "udr_wide", work, num_seeds=S, dr=_wide(setup))
         seconds["udr_wide"] = time.time() - t
         add("udr_wide", _scores(r, plant, args.episodes, S))
     if "lsdr" in methods:
         t = time.time()
-        w = setup["wide"]
-        r = _train(base, "lsdr", work, num_seeds=S, algo="lsdr", algo_options={"dist": "gaussian"},
-                   dr=DRConfig(params=tuple(w), low=tuple(v[0] for v in w.values()), high=tuple(v[1] for v in w.values())))
+        r = _train(base, "lsdr", work, num_seeds=S, algo="lsdr", algo_options={"dist": "gaussian"}, dr=_wide(setup))
         seconds["lsdr"] = time.time() - t
         add("lsdr", _scores(r, plant, args.episodes, S))
     if not needs_nominal - {"nominal", "oracle_ft"}:
@@ -236,31 +236,34 @@ def main(args: Settings):
     if "diag_dr_1" in methods or "diag_dr_2" in methods:
         t = time.time()
         r1, r2, s1, s2 = [], [], [], []
+        # a diagnosis the loop cannot train on (inconclusive, or masses > 10x off) falls back to the
+        # wide box: what the user would randomise without a diagnosis (``loop.unusable``)
+        fallback = _wide(setup) if args.loop_fallback else None
         for s in per_seed:
             b = dataclasses.replace(base, seed=s)
             try:
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
-                                     run_seed=s, noise=1e-3, warm_start=args.loop_warm_start)
+                                     run_seed=s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback)
             except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
                 _not_run("diag_dr_1", s, f"the diagnosis refused the nominal policy's recordings ({e})")
                 continue
             except ConfigError as e:  # the training refuses the diagnosis: one seed lost, not the run
                 _not_run("diag_dr_1", s, f"the retraining refused the diagnosis ({e})")
                 continue
-            diagnoses[f"seed{s}_iter1"] = it1["diagnosis"]
+            diagnoses[f"seed{s}_iter1"] = dict(it1["diagnosis"], trained_on=it1["trained_on"], why=it1["why"])
             r1 += _scores(it1["run"], plant, args.episodes, 1)
             s1.append(s)
             if "diag_dr_2" in methods:
                 try:
                     it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
-                                         seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start)
+                                         seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback)
                 except RecordingError as e:
                     _not_run("diag_dr_2", s, f"the diagnosis refused the first loop's recordings ({e})")
                     continue
                 except ConfigError as e:
                     _not_run("diag_dr_2", s, f"the retraining refused the diagnosis ({e})")
                     continue
-                diagnoses[f"seed{s}_iter2"] = it2["diagnosis"]
+                diagnoses[f"seed{s}_iter2"] = dict(it2["diagnosis"], trained_on=it2["trained_on"], why=it2["why"])
                 r2 += _scores(it2["run"], plant, args.episodes, 1)
                 s2.append(s)
         seconds["diag_dr"] = seconds.get("diag_dr", 0.0) + time.time() - t
@@ -269,6 +272,13 @@ def main(args: Settings):
         if r2:
             add("diag_dr_2", r2, s2)
     write(args, setup, rows, diagnoses, seconds)
+
+
+def _wide(setup: dict):
+    from sim2real.algos.base import DRConfig
+
+    w = setup["wide"]
+    return DRConfig(params=tuple(w), low=tuple(v[0] for v in w.values()), high=tuple(v[1] for v in w.values()))
 
 
 def _not_run(method: str, seed: int, why: str) -> None:

@@ -204,6 +204,38 @@ def test_one_loop_iteration_end_to_end(tmp_path):
     assert os.path.exists(out / "iter_1" / "run" / "policy.msgpack")
 
 
+def test_a_diagnosis_the_loop_cannot_use_trains_on_the_fallback_box(run_dir, tmp_path, monkeypatch):
+    """An inconclusive diagnosis, or one whose masses stand in for something else (> 10x off),
+    is not trained on when a fallback box is given; without one it is, with a warning. A bad
+    fallback is refused before anything is trained."""
+    import importlib
+
+    from sim2real.tools import loop
+
+    diag_lib = importlib.import_module("sim2real.sysid.diagnose")  # (the package exports the function by that name)
+
+    ok = {"answer": "effects", "nominal_refit": {"mass:pole": {"nominal": 1.0, "fitted": 1.2, "unit": "kg"}}}
+    far = {"answer": "effects", "nominal_refit": {"mass:pole": {"nominal": 1.0, "fitted": 14.0, "unit": "kg"}}}
+    assert loop.unusable(ok) is None
+    assert "mass:pole 1 -> 14 kg" in loop.unusable(far)
+    assert loop.unusable(dict(ok, answer="inconclusive")) == "the diagnosis is inconclusive"
+
+    def fake(cfg):  # what the hopper's 0.1 s recordings gave: an effect beside far masses
+        os.makedirs(cfg.out, exist_ok=True)
+        return dict(far, selected=[], fitted_params={"mass:pole": 14.0}, fit={"before": 1.0, "after": 0.5})
+
+    monkeypatch.setattr(diag_lib, "diagnose", fake)
+    box = DRConfig(params=("coulomb:hinge",), low=(0.0,), high=(0.6,))
+    it = loop.iteration(run_dir, tiny(tmp_path), PLANT, str(tmp_path / "it"), 2, noise=1e-3, fallback=box)
+    assert it["trained_on"] == "fallback" and "x14" in it["why"]
+    cfg = yaml.safe_load(open(os.path.join(it["run"], "config.yaml")))
+    assert cfg["dr"]["params"] == ["coulomb:hinge"] and cfg["dr"]["high"] == [0.6] and not cfg["dr"]["from_diagnosis"]
+    with pytest.raises(config_lib.ConfigError, match="fallback: .*low 0.5 must be below high 0.1"):
+        _script("loop").main(["env=pendulum", f"target={PLANT}", f"out={tmp_path / 'bad'}", "fallback.params=[coulomb:hinge]",
+                              "fallback.low=[0.5]", "fallback.high=[0.1]"])
+    assert not os.path.exists(tmp_path / "bad")
+
+
 @pytest.fixture(scope="module")
 def dr_run(tmp_path_factory):
     """A tiny 2-seed run with a 2-D DR box (shared: each training costs a compilation)."""

@@ -8,7 +8,9 @@
 ``iterations``: record -> diagnose -> retrain rounds (``sim2real/tools/loop.py``), in ``out/iter_<k>``.
 ``episodes``: recorded episodes per iteration (the last is held out by the diagnosis).
 ``eval_episodes``: episodes on the target that score each policy at the end (``out/loop.json``).
-``noise``: the target's position-sensor noise (m or rad). Every other ``key=value`` (and
+``noise``: the target's position-sensor noise (m or rad). ``fallback.params=[..]
+fallback.low=[..] fallback.high=[..]``: the box an iteration trains on when its diagnosis cannot be
+used (inconclusive, or body masses re-fitted more than 10x off). Every other ``key=value`` (and
 ``config=``) is the training config's, as for ``scripts/train.py``; ``diagnose.<key>=value``
 sets a diagnosis option.
 """
@@ -34,6 +36,14 @@ def main(argv):
     base = config_lib.load(TrainConfig, [a for a in rest if not a.startswith("diagnose.")])
     validate(base)
     own = config_lib.load(loop.LoopConfig, mine)
+    if own.fallback.params:  # checked now, not after the first training and diagnosis
+        from sim2real.algos.base import DRSpace
+        from sim2real.envs import make
+
+        try:
+            DRSpace(make(base.env, **dict(base.env_options)), own.fallback)
+        except (ValueError, KeyError) as e:
+            raise config_lib.ConfigError(f"fallback: {e}".replace("dr.", "fallback.")) from None
     if not os.path.exists(own.target):
         raise FileNotFoundError(f"target={own.target}: file not found")
     out = own.out
@@ -49,11 +59,13 @@ def main(argv):
     for k in range(1, own.iterations + 1):
         it = loop.iteration(run, base, own.target, os.path.join(out, f"iter_{k}"), own.episodes,
                             seed=own.seed + k, noise=own.noise, deterministic=own.deterministic,
-                            diagnose_options=diag_opts, progress=own.progress, warm_start=own.warm_start)
+                            diagnose_options=diag_opts, progress=own.progress, warm_start=own.warm_start,
+                            fallback=own.fallback)
         d = it["diagnosis"]
         print(f"iteration {k}: recorded return {it['real_return']:.1f}; diagnosis: {d['answer']}"
               + "".join(f"; {s['effect']}" + (f"@{s['target']}" if s["target"] else "") + " "
-                        + ", ".join(f"{n}={v:.4g}" for n, v in s["params"].items()) for s in d["selected"]))
+                        + ", ".join(f"{n}={v:.4g}" for n, v in s["params"].items()) for s in d["selected"])
+              + (f"; trained on the fallback box ({it['why']})" if it["trained_on"] == "fallback" else ""))
         steps.append(it)
         run = runs[f"iter_{k}"] = it["run"]
     scores = {}

@@ -9,6 +9,14 @@ One iteration (``iteration``), in ``out/iter_<k>/``:
    physics, randomised over +- k std: ``algos/from_diagnosis.py``); with ``warm_start`` it
    fine-tunes the policy that made the recordings instead of training a new one.
 
+A diagnosis the loop cannot train on (``unusable``: its answer is ``inconclusive``, or it re-fitted
+a body mass more than ``FAR_MASS`` times off the model's, which then stands in for something else)
+is not trained on when the user gave a ``fallback`` box: the run trains on that box instead, and
+``loop.json`` says why. What makes such a diagnosis is too little data: the hopper's nominal
+policy falls within 0.1 s on its real plant, and three such recordings gave masses 5-25x the
+model's beside a delay where the plant has a lag (``benchmarks/closed_loop.py``). The next
+iteration records the fallback's policy, which stays up longer, and diagnoses again.
+
 The training config is the same base for every iteration (each diagnosis replaces the last one's
 physics rather than adding to it); each diagnosis is of the real system, so what the first one
 missed the second may find in recordings of a policy that behaves differently.
@@ -18,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import os
 
+from sim2real.algos.base import DRConfig
 from sim2real.envs.base import ASSETS
 from sim2real.training.driver import TrainConfig
 
@@ -42,6 +51,9 @@ class LoopConfig:
         fine-tunes the deployed policy. It keeps what that policy learnt where the diagnosed
         physics is harder to learn from scratch (the cart-pole swing-up against 3 N of stiction:
         ``benchmarks/closed_loop.py``).
+      fallback: the randomisation an iteration trains on when its diagnosis is ``unusable``
+        (``fallback.params=[...] fallback.low=[...] fallback.high=[...]``, as ``dr.*``); empty:
+        it trains on the diagnosis anyway, with a warning.
     """
     target: str = ""
     out: str = ""
@@ -55,6 +67,7 @@ class LoopConfig:
     overwrite: bool = False
     progress: bool = True
     warm_start: bool = False
+    fallback: DRConfig = DRConfig()
 
     def __post_init__(self):
         from sim2real.common.config import ConfigError
@@ -74,13 +87,27 @@ def env_model_path(env) -> str:
     return os.path.join(ASSETS, env.xml)
 
 
+def unusable(d: dict) -> str | None:
+    """Why the loop should not train on diagnosis ``d`` (a ``diagnosis.json``), or None."""
+    from sim2real.sysid.diagnose import far_masses
+
+    if d["answer"] == "inconclusive":
+        return "the diagnosis is inconclusive"
+    far = far_masses(d["nominal_refit"])
+    return far and f"the diagnosis {far.split(' -- ')[0]}"
+
+
 def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: int = 3, seed: int = 0,
               run_seed: int = 0, noise: float = 0.0, deterministic: bool = True, diagnose_options=(),
-              progress: bool = False, warm_start: bool = False) -> dict:
+              progress: bool = False, warm_start: bool = False, fallback: DRConfig | None = None) -> dict:
     """One loop iteration from the policy of ``run_dir`` (seed ``run_seed``); returns what it did
-    (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded episodes).
-    ``warm_start``: the retraining starts from that policy (seed ``run_seed`` for a one-seed
-    ``base``, else each seed from its own)."""
+    (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded
+    episodes, ``trained_on``: ``diagnosis`` or ``fallback``, and ``why`` the diagnosis was not
+    used). ``warm_start``: the retraining starts from that policy (seed ``run_seed`` for a one-seed
+    ``base``, else each seed from its own). ``fallback``: the randomisation to train on when the
+    diagnosis is ``unusable`` (``LoopConfig.fallback``)."""
+    import warnings
+
     from sim2real.common import config as config_lib
     from sim2real.envs import make
     from sim2real.envs.registry import env_class
@@ -104,13 +131,21 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
                                             f"progress={str(progress).lower()}"] + list(diagnose_options))
     dcfg = dataclasses.replace(dcfg, targets=tuple(env_targets), expressible=tuple(env_names))
     d = diagnose(dcfg)
-    cfg = dataclasses.replace(base, name="run", out_dir=out, resume=False, overwrite=False, progress=progress,
-                              dr=dataclasses.replace(base.dr, from_diagnosis=os.path.join(out, "diagnosis")))
+    why = unusable(d)
+    dr = dataclasses.replace(base.dr, from_diagnosis=os.path.join(out, "diagnosis"))
+    if why and fallback is not None and fallback.params:
+        dr = dataclasses.replace(fallback, from_diagnosis="")
+        print(f"loop: {why}; training on the fallback box ({', '.join(fallback.params)}) instead")
+    elif why:
+        warnings.warn(f"loop: {why}; no fallback box given (fallback.params=...), so it trains on it anyway",
+                      stacklevel=2)
+    cfg = dataclasses.replace(base, name="run", out_dir=out, resume=False, overwrite=False, progress=progress, dr=dr)
     if warm_start:
         cfg = dataclasses.replace(cfg, algo_options={**cfg.algo_options, "warm_start": os.path.abspath(run_dir),
                                                      "warm_start_seed": run_seed if base.num_seeds == 1 else -1})
     res = train(cfg)
     return {"recordings": paths, "real_return": what["mean_return"], "run": res["run_dir"],
+            "trained_on": "diagnosis" if dr.from_diagnosis else "fallback", "why": why or "",
             "diagnosis": {"answer": d["answer"],
                           "selected": [{"effect": s["effect"], "target": s["target"], "params": s["params"]}
                                        for s in d["selected"]],
