@@ -171,6 +171,23 @@ def test_backlash_withholds_torque_until_the_band_is_crossed(pend):
     assert (res["backlash"]["force"][:, 0] != 0).any()     # later the band is crossed
 
 
+def test_a_backlash_motor_side_moves_with_its_joints_corrected_velocity():
+    """``Effects.rebase``: the diagnosis replays the command path with estimated joint velocities
+    and starts each prediction from refined ones; the backlash's motor side, dragged along by
+    its joint, moves by as much (its gap does not), and the delay line and lag keep theirs."""
+    env = env_for("arm2")
+    fx = env.effects
+    es = fx.init_state()
+    es["backlash"] = (jnp.array([0.01, -0.02]), jnp.array([1.0, -2.0]))
+    dv = jnp.array([0.3, -0.5])  # shoulder, elbow: each motor drives its own joint
+    out = fx.rebase(es, dv)
+    np.testing.assert_allclose(out["backlash"][1], [1.3, -2.5], rtol=1e-6)
+    np.testing.assert_array_equal(out["backlash"][0], es["backlash"][0])
+    for name in set(es) - {"backlash"}:
+        for a, b in zip(jax.tree_util.tree_leaves(out[name]), jax.tree_util.tree_leaves(es[name])):
+            np.testing.assert_array_equal(a, b)
+
+
 def test_sensor_effects_touch_measurements_not_physics(pend):
     res, _, _ = pend
     nominal = res["nominal"]

@@ -116,6 +116,15 @@ class Effects:
             u, out[name] = k.command(d, z, es[name], u, j, n, qpos, h, qvel)
         return u, out
 
+    def rebase(self, es: EffectState, dv) -> EffectState:
+        """The command path's state when the joint velocities it was run with change by ``dv
+        [nv]`` (``Kind.rebase``; ``sysid.shooting``: a segment's initial velocity refined away from
+        the estimate its command path was replayed with)."""
+        out = dict(es)
+        for k, name, d in self._command:
+            out[name] = k.rebase(d, es[name], dv)
+        return out
+
     def velocity_damping(self, z, qvel) -> tuple[np.ndarray, jax.Array]:
         """Velocity-dependent forces (Coulomb/Stribeck friction, drag, ...) as damping for one sub-step.
 

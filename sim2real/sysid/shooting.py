@@ -255,6 +255,9 @@ class Shooting:
         if sys.mj.na:
             d = d.replace(act=act)
         start = data["start"][s]
+        # the command path was replayed with the estimated velocities; the segment starts from
+        # refined ones, and what the joint dragged along (a backlash's motor side) moves with it
+        es = fx.rebase(es, v0 - data["v"][start])
         u = jax.lax.dynamic_slice_in_dim(data["ctrl"], start, self.H)
         f = jax.lax.dynamic_slice_in_dim(data["qfrc"], start, self.H)
 

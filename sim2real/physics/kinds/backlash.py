@@ -180,6 +180,12 @@ class Backlash(Kind):
     def command_rows(self, data):
         return [int(r) for r in data["rows"] if r >= 0]
 
+    def rebase(self, data, state, dv):
+        # the motor side's velocity was computed against the joint's (estimated) velocity: where
+        # that estimate is corrected, the motor side it dragged along is corrected by as much
+        gap, w = state
+        return gap, w + dv[data["dof"]]
+
     def candidates(self, system, sc, add, target) -> None:
         m = system.mj
         an = system.actuators[target]

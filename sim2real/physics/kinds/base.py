@@ -17,7 +17,8 @@ hook                who calls it
                     held over the control step (``qfrc_applied``)
 ``command``         ``Effects.actuate``: a stage of the command path, in ``command_order``
                     (delay line 10 -> motor lag 20 -> backlash 30), with its own memory
-                    (``command_state``; ``push`` once per control step)
+                    (``command_state``; ``push`` once per control step; ``rebase`` where the
+                    joint velocities it ran with are corrected: ``sysid.shooting``)
 ``sense``           ``Effects.sense`` / ``measure`` / ``unsense``: how a measured position is made
 ``export``          ``sysid.export``: the fitted value written into the user's ``MjSpec``
 ``candidates``      ``sysid.candidates.library``: the hypotheses the diagnosis searches
@@ -116,6 +117,12 @@ class Kind:
     def command_rows(self, data) -> list[int]:
         """Rows of ``z`` whose value > 0 switches this stage on (its memory then matters)."""
         return []
+
+    def rebase(self, data, state, dv):
+        """Its memory when the joint velocities it was run with change by ``dv [nv]``: a stage
+        whose state moves with its joint (the backlash's motor side) moves with it; the rest keep
+        theirs."""
+        return state
 
     def sense_setup(self, m: mujoco.MjModel, spec):
         """Static data for ``sense``/``measure``/``unsense``, or None when this kind changes no measurement."""
