@@ -171,15 +171,19 @@ def far_masses(nominal_refit: dict) -> str | None:
     None. Such a mass stands in for physics nothing else could fit (on the KUKA LWR4+ recordings
     link 1 went from 2.7 to 70 kg where the arm has a constant torque offset the library does not
     express): the fit may still predict better, but the mass is not a measurement of the body."""
-    off = []
-    for n, r in nominal_refit.items():
-        if n.startswith("mass:") and is_far_mass(r["nominal"], r["fitted"]):
-            off.append(f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g} {r['unit']} (x{r['fitted'] / r['nominal']:.3g})")
+    off = far_mass_list(nominal_refit)
     if not off:
         return None
     return ("re-fitted masses far from the model's: " + ", ".join(off) + f" -- more than {FAR_MASS:g}x off, "
             "they likely make up for physics the effects library lacks or the model gets wrong; do not read "
             "them as the bodies' masses")
+
+
+def far_mass_list(nominal_refit: dict) -> list[str]:
+    """``'mass:<body> nominal -> fitted unit (xratio)'`` for every re-fitted body mass more than
+    ``FAR_MASS`` times off the model's (``far_masses``; the loop's ``unusable``)."""
+    return [f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g} {r['unit']} (x{r['fitted'] / r['nominal']:.3g})"
+            for n, r in nominal_refit.items() if n.startswith("mass:") and is_far_mass(r["nominal"], r["fitted"])]
 
 
 def relative_change(before: float, after: float) -> str:
@@ -512,8 +516,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             cands = [c for c in cands if not c.target or c.target in cfg.targets]
         if cfg.expressible:
             allowed = set(cfg.expressible)
-            left = sorted({c.label for c in cands if not set(c.params) <= allowed})
-            cands = [c for c in cands if set(c.params) <= allowed]
+            kept = [c for c in cands if set(c.params) <= allowed]
+            left = sorted({c.label for c in cands} - {c.label for c in kept})
+            cands = kept
             if left:
                 system.notes.append("not searched, their parameters not among those allowed (`expressible`): "
                                     + ", ".join(left))

@@ -89,12 +89,12 @@ def env_model_path(env) -> str:
 
 def unusable(d: dict) -> str | None:
     """Why the loop should not train on diagnosis ``d`` (a ``diagnosis.json``), or None."""
-    from sim2real.sysid.diagnose import far_masses
+    from sim2real.sysid.diagnose import far_mass_list
 
     if d["answer"] == "inconclusive":
         return "the diagnosis is inconclusive"
-    far = far_masses(d["nominal_refit"])
-    return far and f"the diagnosis {far.split(' -- ')[0]}"
+    far = far_mass_list(d["nominal_refit"])
+    return f"the diagnosis re-fitted masses far from the model's: {', '.join(far)}" if far else None
 
 
 def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: int = 3, seed: int = 0,
