@@ -214,6 +214,41 @@ def test_velocity_prior_widens_only_where_the_smoothing_bends_the_motion():
     assert e[k + 3 * w: k + 5 * w].mean() < 3 * noise            # and only there
 
 
+def test_a_start_velocity_at_a_command_step_is_estimated_across_the_kink():
+    """``start_velocity``: the force steps 3 samples after a command step at 4 s (a delay), so the
+    velocity has a kink there. The cubic smoothing misses the velocity near it by many times the
+    noise; the refit with the jump (its time searched from the command's on) does not. Away from
+    the step, and on a recording with a measured velocity, the smoothed estimates are kept."""
+    from sim2real.sysid.trajectory import Trajectory, _smooth, command_jumps, start_velocity
+
+    rng = np.random.default_rng(0)
+    dt, T, k = 0.002, 4000, 2000
+    t = np.arange(T) * dt
+    tj = t[k + 3]
+    q = 0.3 * np.sin(2 * np.pi * 0.5 * t) + np.where(t > tj, 20.0 * (t - tj) ** 2, 0.0)
+    v_true = 0.3 * np.pi * np.cos(2 * np.pi * 0.5 * t) + np.where(t > tj, 40.0 * (t - tj), 0.0)
+    x = (q + 1e-4 * rng.standard_normal(T))[:, None]
+    ctrl = np.where(np.arange(T) >= k, 1.0, 0.0)[:, None] + 1e-3 * np.sin(t)[:, None]
+    assert list(command_jumps(ctrl)) == [k]
+    s = noise_std(x)
+    w = choose_window(x, s, dt)
+    z = np.zeros((T, 1))
+    tr = Trajectory("r", "r.csv", dt, t, x, _smooth(x, w, dt, 1), _smooth(x, w, dt, 2), ctrl, z, None, None,
+                    s, s, None, None, w, np.ones((T, 1)))
+    near = np.arange(k - w // 2 + 2, k + w // 2 - 2)
+    v, a = start_velocity(tr, near)
+    err_sg = np.abs(tr.v[near, 0] - v_true[near])
+    err = np.abs(v[:, 0] - v_true[near])
+    assert err_sg.max() > 0.1 and err.max() < err_sg.max() / 4
+    assert np.sqrt(np.mean(err**2)) < np.sqrt(np.mean(err_sg**2)) / 4
+    far = np.array([500, 1000, 3500])
+    v_far, a_far = start_velocity(tr, far)
+    np.testing.assert_array_equal(v_far, tr.v[far])
+    np.testing.assert_array_equal(a_far, tr.a[far])
+    measured = dataclasses.replace(tr, qvel=v_true[:, None], sigma_qvel=np.array([1e-3]))
+    np.testing.assert_array_equal(start_velocity(measured, near)[0], tr.v[near])
+
+
 def test_an_effect_the_nominal_refit_absorbed_is_fitted_from_the_nominal_values(tmp_path):
     """A 25 ms lag on a stiff linear-axis servo (1 kHz, 5 um encoder): without it the nominal re-fit
     takes a 4x heavier, 40x damped carriage; a lag fitted from there stops near 8 ms. Screened and

@@ -28,7 +28,7 @@ import numpy as np
 from sim2real.physics import stepper
 from sim2real.physics.params import clip
 from sim2real.sysid.derivatives import velocity_state
-from sim2real.sysid.trajectory import SPREAD_FLOOR, signal_scale
+from sim2real.sysid.trajectory import SPREAD_FLOOR, signal_scale, start_velocity
 
 B = 8  # physics vectors per call
 
@@ -144,7 +144,11 @@ class Shooting:
         # the measured state at every segment start
         st = self.tiles.start
         self.q0 = q_all[st]
-        self.v0 = velocity_state(cat(lambda tr: tr.v)[st], cat(lambda tr: tr.a)[st], system.h)
+        v_st, a_st = np.empty((S, m.nv)), np.empty((S, m.nv))
+        for r, tr in enumerate(trajs):  # (a start within a command step's window: ``start_velocity``)
+            sel = self.tiles.traj == r
+            v_st[sel], a_st[sel] = start_velocity(tr, self.tiles.local[sel])
+        self.v0 = velocity_state(v_st, a_st, system.h)
         # each segment's start velocity is trusted as far as the data there allows (``sigma_v_t``)
         local = np.stack([trajs[r].sigma_v_t[s] if trajs[r].sigma_v_t is not None else trajs[r].sigma_v
                           for s, r in zip(self.tiles.local, self.tiles.traj)])

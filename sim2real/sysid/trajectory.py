@@ -23,6 +23,7 @@ import mujoco
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 from scipy.signal import savgol_coeffs, savgol_filter
+from scipy.stats import f as f_dist
 
 
 @dataclasses.dataclass
@@ -241,3 +242,76 @@ def from_recording(rec, system, window: int | None = None, sigma_q: np.ndarray |
     sigma_force = noise_std(force) if force is not None else None
     return Trajectory(rec.name, rec.path, dt, rec.time - rec.time[0], qpos, v, a, ctrl, qfrc, force, qvel,
                       sigma_q, sigma_v, sigma_qvel, sigma_force, int(w), sigma_v_t)
+
+
+def command_jumps(ctrl: np.ndarray, share: float = 0.05, typical: float = 10.0) -> np.ndarray:
+    """Samples ``[k]`` at which some command column of ``ctrl [T, nu]`` jumps: by more than
+    ``share`` of its spread and ``typical`` times its median change per sample (a step's or a
+    PRBS switch's first sample; a smooth command has none, nor has a feedback loop's output whose
+    every sample moves with the measurement noise, outside its reference's steps)."""
+    if ctrl.shape[1] == 0 or len(ctrl) < 2:
+        return np.zeros(0, int)
+    du = np.abs(np.diff(ctrl, axis=0))
+    spread = np.ptp(ctrl, 0)
+    limit = np.maximum(share * np.where(spread > 0, spread, np.inf), typical * np.median(du, 0))
+    return np.where((du > limit).any(1))[0] + 1
+
+
+def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity ``[k, nv]`` and acceleration just before ``[k, nv]`` at samples ``idx [k]`` of
+    ``tr``, for starting simulations there: where a command jumps within the smoothing window.
+
+    A force that steps after a command jump puts a kink in the velocity (the acceleration jumps),
+    and a cubic smoothing across it misses the velocity by up to ten times its noise (a
+    flywheel's step at 500 Hz, window 51: 0.15 rad/s rms within the window of a step, 0.013 away
+    from one), more than ``smoothing_error`` says; a simulation started there carries that error
+    through its whole segment. So the window is refitted with the cubic plus, at each jump
+    inside it, a jump of acceleration and of jerk. Where the force follows the command is the
+    physics' business (a delay moves it), not the estimate's: the jumps are tried shifted by
+    0, 1, ... half a window of samples together, the best shift kept, and that fit is used where
+    an F test (``level``, divided among the shifts tried) says it explains the positions better
+    than the cubic alone (windows with fewer than twice the samples of its parameters are not
+    refitted). Elsewhere, and for recordings with a measured ``qvel`` (whose
+    estimate passes a kink smoothly), the smoothed estimates are kept. Columns are judged one
+    by one."""
+    idx = np.asarray(idx, int)
+    v, a = tr.v[idx].copy(), tr.a[idx].copy()
+    hw = tr.window // 2
+    jumps = command_jumps(tr.ctrl)
+    if tr.qvel is not None or not len(jumps) or tr.q.shape[1] != tr.v.shape[1]:
+        return v, a
+    t = np.arange(-hw, hw + 1) * tr.dt
+    cubic = np.stack([np.ones_like(t), t, t**2, t**3], 1)
+    shifts = hw + 1
+    for n, i in enumerate(idx):
+        if i < hw or i + hw >= len(tr.q):
+            continue
+        y = tr.q[i - hw: i + hw + 1]
+        rss0 = np.sum((y - cubic @ np.linalg.lstsq(cubic, y, rcond=None)[0]) ** 2, 0)
+        best = None
+        for s in range(shifts):
+            ks = jumps + s
+            ks = ks[(ks > i - hw) & (ks < i + hw - 1)]  # (two samples after a jump, at least)
+            if not len(ks) or len(t) < 2 * (4 + 2 * len(ks)):  # (twice the samples of parameters)
+                continue
+            tk = (ks - i) * tr.dt
+            ramps = [np.maximum(t - x, 0.0) for x in tk]
+            A = np.concatenate([cubic, np.stack([r**p for r in ramps for p in (2, 3)], 1)], 1)
+            c = np.linalg.lstsq(A, y, rcond=None)[0]
+            rss1 = np.sum((y - A @ c) ** 2, 0)
+            if best is None or rss1.sum() < best[0].sum():
+                best = (rss1, tk, c)
+        if best is None:
+            continue
+        rss1, tk, c = best
+        extra, free = 2 * len(tk), len(t) - 4 - 2 * len(tk)
+        F = (rss0 - rss1) / extra / np.maximum(rss1 / free, 1e-300)
+        ok = F > f_dist.ppf(1 - (1 - level) / shifts, extra, free)
+        # derivatives at t = 0 (a jump exactly there counts as after: the acceleration *before*
+        # the start is the one a semi-implicit step's state lags by, ``velocity_state``)
+        before = np.maximum(-tk, 0.0)
+        dv = np.concatenate([[0.0, 1.0, 0.0, 0.0], np.ravel([[2 * b, 3 * b**2] for b in before])])
+        da = np.concatenate([[0.0, 0.0, 2.0, 0.0], np.ravel([[2.0 * (b > 0), 6 * b] for b in before])])
+        v[n] = np.where(ok, dv @ c, v[n])
+        a[n] = np.where(ok, da @ c, a[n])
+    return v, a
