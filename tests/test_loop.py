@@ -230,7 +230,7 @@ def test_a_diagnosis_the_loop_cannot_use_trains_on_the_fallback_box(run_dir, tmp
     assert it["trained_on"] == "fallback" and "x14" in it["why"]
     cfg = yaml.safe_load(open(os.path.join(it["run"], "config.yaml")))
     assert cfg["dr"]["params"] == ["coulomb:hinge"] and cfg["dr"]["high"] == [0.6] and not cfg["dr"]["from_diagnosis"]
-    with pytest.raises(config_lib.ConfigError, match="fallback: .*low 0.5 must be below high 0.1"):
+    with pytest.raises(config_lib.ConfigError, match="fallback box for .coulomb:hinge.: low 0.5 must be below high 0.1"):
         _script("loop").main(["env=pendulum", f"target={PLANT}", f"out={tmp_path / 'bad'}", "fallback.params=[coulomb:hinge]",
                               "fallback.low=[0.5]", "fallback.high=[0.1]"])
     assert not os.path.exists(tmp_path / "bad")

@@ -35,26 +35,28 @@ class DRConfig:
 
 
 class DRSpace:
-    """The randomised sub-vector: ``expand(z_sub [K]) -> z [P]`` on top of the fixed base."""
+    """The randomised sub-vector: ``expand(z_sub [K]) -> z [P]`` on top of the fixed base.
 
-    def __init__(self, env: Env, cfg: DRConfig):
+    ``key``: the config key the box came from, named in errors (``dr``; the loop's ``fallback``)."""
+
+    def __init__(self, env: Env, cfg: DRConfig, key: str = "dr"):
         if not (len(cfg.params) == len(cfg.low) == len(cfg.high)):
-            raise ValueError(f"dr.params, dr.low and dr.high must have the same length "
+            raise ValueError(f"{key}.params, {key}.low and {key}.high must have the same length "
                              f"(got {len(cfg.params)}, {len(cfg.low)}, {len(cfg.high)})")
         self.env = env
         self.sub = Subspace(env.spec, tuple(cfg.params))  # (unknown names: an error listing the known ones)
         outside_ok = env.config.out_of_bounds == "terminate"
         for n, lo, hi in zip(cfg.params, cfg.low, cfg.high):
             if not (np.isfinite(lo) and np.isfinite(hi)):
-                raise ValueError(f"dr box for '{n}': [{lo}, {hi}] must be finite")
+                raise ValueError(f"{key} box for '{n}': [{lo}, {hi}] must be finite")
             if not lo < hi:
-                raise ValueError(f"dr box for '{n}': low {lo} must be below high {hi}")
+                raise ValueError(f"{key} box for '{n}': low {lo} must be below high {hi}")
             p = env.spec[n]
             if not outside_ok and (lo < p.low or hi > p.high):
                 # the bounds rule (physics/params.py): a box is given at the API boundary, so it is
                 # checked, not clipped; a box that means to reach past the bounds (the LSDR paper's
                 # priors) says so with out_of_bounds=terminate, where impossible contexts end at once
-                raise ValueError(f"dr box for '{n}' [{lo}, {hi}] reaches outside its physical bounds "
+                raise ValueError(f"{key} box for '{n}' [{lo}, {hi}] reaches outside its physical bounds "
                                  f"{bounds_text(p)}; keep it inside, or set "
                                  "env_options.out_of_bounds=terminate (impossible contexts end their episode)")
         self.base = env.z_of(**{k: float(v) for k, v in cfg.fixed.items()})

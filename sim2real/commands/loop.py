@@ -41,9 +41,9 @@ def main(argv):
         from sim2real.envs import make
 
         try:
-            DRSpace(make(base.env, **dict(base.env_options)), own.fallback)
+            DRSpace(make(base.env, **dict(base.env_options)), own.fallback, key="fallback")
         except (ValueError, KeyError) as e:
-            raise config_lib.ConfigError(f"fallback: {e}".replace("dr.", "fallback.")) from None
+            raise config_lib.ConfigError(f"fallback: {e}") from None
     if not os.path.exists(own.target):
         raise FileNotFoundError(f"target={own.target}: file not found")
     out = own.out
