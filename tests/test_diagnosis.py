@@ -190,6 +190,23 @@ def test_design_is_hashable_for_the_case_cache():
     assert c.design == cases.build_cases()[0].design
 
 
+def test_a_turning_angle_is_weighted_alike_however_long_it_turned():
+    """``signal_scale``: a flywheel turning at 20 rad/s has a spread that grows with the recording's
+    length; its weight does not (it counts up to a turn's spread). A slide's does not change, nor
+    does a swinging angle's."""
+    from sim2real.sysid.trajectory import TURN_STD, signal_scale
+
+    t8, t16 = np.arange(0, 8, 0.005), np.arange(0, 16, 0.005)
+    sigma = np.array([[1e-3, 1e-3, 1e-3]])
+    cols = lambda t: np.stack([20 * t, 0.5 * np.sin(t), 20 * t], 1)  # noqa: E731
+    angles = np.array([True, True, False])
+    s8, s16 = signal_scale(sigma, cols(t8), angles=angles), signal_scale(sigma, cols(t16), angles=angles)
+    assert s8[0] == s16[0] == pytest.approx(np.hypot(1e-3, 0.01 * TURN_STD))
+    assert s8[1] == pytest.approx(np.hypot(1e-3, 0.01 * np.std(0.5 * np.sin(t8))))
+    assert s16[2] == pytest.approx(2 * s8[2], rel=0.01)                       # a slide: its spread
+    np.testing.assert_array_equal(signal_scale(sigma, cols(t8))[1:], s8[1:])
+
+
 def test_velocity_prior_widens_only_where_the_smoothing_bends_the_motion():
     """``smoothing_error``: a slow swing with a command step at 4 s (the acceleration jumps). Far from
     the step a segment's start velocity is as good as its noise (and the slow swing's small bend);

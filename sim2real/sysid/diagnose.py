@@ -313,7 +313,7 @@ def choose_substeps(system: System, trajs, max_substeps: int = 64, seconds: floa
     predictions could use (``choose_horizon``'s budget)."""
     n = system.substeps
     steps = max(5, int(round(seconds / trajs[0].dt)))
-    scale = signal_scale([t.sigma_q for t in trajs], np.concatenate([t.q for t in trajs])) + 1e-12
+    scale = signal_scale([t.sigma_q for t in trajs], np.concatenate([t.q for t in trajs]), angles=system.angles) + 1e-12
 
     def differ(a, b):
         with np.errstate(invalid="ignore"):

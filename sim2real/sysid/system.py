@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 
 import mujoco
+import numpy as np
 
 from sim2real.physics import catalog
 from sim2real.physics.params import Param
@@ -91,6 +92,7 @@ class System:
         jn = self.columns.joints
         self._adapt(m, dt, substeps)
         self.joints = jn
+        self.angles = np.array([m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE for j in range(m.njnt)])  # [nq] (hinges)
         self.actuators = self.columns.actuators
         self.bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody)
         moving = [b for b in range(1, m.nbody) if m.body_mass[b] > 0 and self._moves(m, b)]

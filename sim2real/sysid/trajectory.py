@@ -79,10 +79,20 @@ class Trajectory:
 SPREAD_FLOOR = 0.01
 
 
-def signal_scale(sigmas, values: np.ndarray, floor: float = SPREAD_FLOOR) -> np.ndarray:
+# an angle's spread counts up to a turn's (the std of an angle spread evenly over one turn): a joint
+# that turns over and over (a flywheel) has a spread that grows with how long it was recorded, and
+# says nothing about how closely its motion must be predicted
+TURN_STD = 2 * np.pi / np.sqrt(12)
+
+
+def signal_scale(sigmas, values: np.ndarray, floor: float = SPREAD_FLOOR, angles=None) -> np.ndarray:
     """``[n]`` scale each column of ``values [T, n]`` is weighed with: the largest of its
-    recordings' noise stds ``sigmas [R, n]``, combined with ``floor`` times its spread."""
-    return np.sqrt(np.max(sigmas, 0) ** 2 + (floor * np.std(values, 0)) ** 2)
+    recordings' noise stds ``sigmas [R, n]``, combined with ``floor`` times its spread (for the
+    columns ``angles [n]`` marks, at most ``TURN_STD``)."""
+    spread = np.std(values, 0)
+    if angles is not None:
+        spread = np.where(angles, np.minimum(spread, TURN_STD), spread)
+    return np.sqrt(np.max(sigmas, 0) ** 2 + (floor * spread) ** 2)
 
 
 def noise_std(x: np.ndarray) -> np.ndarray:
