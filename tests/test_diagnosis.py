@@ -235,7 +235,8 @@ def test_a_start_velocity_at_a_command_step_is_estimated_across_the_kink():
     """``start_velocity``: the force steps 3 samples after a command step at 4 s (a delay), so the
     velocity has a kink there. The cubic smoothing misses the velocity near it by many times the
     noise; the refit with the jump (its time searched from the command's on) does not. Away from
-    the step, and on a recording with a measured velocity, the smoothed estimates are kept."""
+    the step the smoothed estimates are kept. With a measured velocity, its raw value is taken
+    at the step, where its smoothing bends too."""
     from sim2real.sysid.trajectory import Trajectory, _smooth, command_jumps, start_velocity
 
     rng = np.random.default_rng(0)
@@ -262,8 +263,14 @@ def test_a_start_velocity_at_a_command_step_is_estimated_across_the_kink():
     v_far, a_far = start_velocity(tr, far)
     np.testing.assert_array_equal(v_far, tr.v[far])
     np.testing.assert_array_equal(a_far, tr.a[far])
-    measured = dataclasses.replace(tr, qvel=v_true[:, None], sigma_qvel=np.array([1e-3]))
-    np.testing.assert_array_equal(start_velocity(measured, near)[0], tr.v[near])
+    # with a measured velocity: at the step its smoothing bends, and the raw measurement is taken
+    qv = v_true[:, None] + 1e-3 * rng.standard_normal((T, 1))
+    wv = choose_window(qv, noise_std(qv), dt)
+    measured = dataclasses.replace(tr, qvel=qv, sigma_qvel=noise_std(qv), v=_smooth(qv, wv, dt, 0))
+    vm = start_velocity(measured, near)[0][:, 0]
+    err_m, err_raw = np.abs(measured.v[near, 0] - v_true[near]), np.abs(vm - v_true[near])
+    assert err_m.max() > 0.03 and err_raw.max() < err_m.max() / 4
+    np.testing.assert_array_equal(start_velocity(measured, far)[0], measured.v[far])
 
 
 def test_an_effect_the_nominal_refit_absorbed_is_fitted_from_the_nominal_values(tmp_path):
