@@ -13,7 +13,11 @@ built once:
 * velocities: the smoothed derivative of the positions, combined with a measured ``qvel``
   column (smoothed the same way) by inverse-variance weights, so a measured velocity counts
   as much as its noise allows; ``sigma_v`` is the resulting standard error, the smoothing's
-  bias included (``smoothing_error``): a fit trusts a segment's start velocity no more than that.
+  bias included (``smoothing_error``): a fit trusts a segment's start velocity no more than that;
+* where a segment starts near a command's jump, its start velocity is estimated across the kink
+  the force's step puts in the motion, or taken from the measured ``qvel`` (``start_velocity``);
+* each signal's weight in the fits (``signal_scale``): its noise, and at least 1% of its spread,
+  an angle's counted up to one turn's.
 """
 from __future__ import annotations
 
