@@ -285,9 +285,8 @@ def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99) -> tupl
     0, 1, ... half a window of samples together, the best shift kept, and that fit is used where
     an F test (``level``, divided among the shifts tried) says it explains the positions better
     than the cubic alone (windows with fewer than twice the samples of its parameters are not
-    refitted). Elsewhere, and for recordings with a measured ``qvel`` (whose
-    estimate passes a kink smoothly), the smoothed estimates are kept. Columns are judged one
-    by one."""
+    refitted); elsewhere the smoothed estimates are kept. Columns are judged one by one. Where
+    ``qvel`` is measured, ``_measured_start`` instead."""
     idx = np.asarray(idx, int)
     v, a = tr.v[idx].copy(), tr.a[idx].copy()
     hw = tr.window // 2
