@@ -119,7 +119,7 @@ class Shooting:
         # measured targets of every segment: samples start+1 .. start+H
         idx = self.tiles.start[:, None] + 1 + np.arange(H)[None]
         self.signals = {"qpos": q_all[idx]}
-        scale = {"qpos": signal_scale([tr.sigma_q for tr in trajs], q_all, floor, getattr(system, "angles", None))}
+        scale = {"qpos": signal_scale([tr.sigma_q for tr in trajs], q_all, floor, system.angles)}
         # the measured velocity columns compared (None: the recordings have none) and those left out
         self.qvel_cols, self.left_out = None, []
         if all(tr.qvel is not None for tr in trajs):

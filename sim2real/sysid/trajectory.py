@@ -195,6 +195,13 @@ def _smooth(x, w, dt, deriv):
     return savgol_filter(x, w, 3, deriv=deriv, delta=dt, axis=0, mode="interp")
 
 
+def _smooth_measured(qvel, sigma_qvel, dt):
+    """``(window, smoothed [T, nv])`` of a measured velocity column set (``from_recording``; the raw
+    column's bend at a command's kink, ``_measured_start``)."""
+    wv = choose_window(qvel, sigma_qvel, dt)
+    return wv, _smooth(qvel, wv, dt, 0)
+
+
 def smoothing_error(x: np.ndarray, w: int, sigma: np.ndarray, dt: float, deriv: int) -> np.ndarray:
     """``[T, n]`` error of the window-``w`` Savitzky-Golay estimate (``deriv``-th derivative) of
     each column of ``x [T, n]`` at every sample: its noise (``sigma``: the columns' white noise)
@@ -244,8 +251,7 @@ def from_recording(rec, system, window: int | None = None, sigma_q: np.ndarray |
     if all(rec.get("qvel", j) is not None for j in system.joints):
         qvel = np.stack([rec.get("qvel", j) for j in system.joints], -1)
         sigma_qvel = noise_std(qvel)
-        wv = choose_window(qvel, sigma_qvel, dt)
-        vm = _smooth(qvel, wv, dt, 0)
+        wv, vm = _smooth_measured(qvel, sigma_qvel, dt)
         s_m = smoothing_error(qvel, wv, sigma_qvel, dt, 0)
         # inverse-variance combination of the two estimates, sample by sample (errors: noise and
         # the local smoothing bias)
@@ -291,7 +297,7 @@ def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99) -> tupl
     v, a = tr.v[idx].copy(), tr.a[idx].copy()
     hw = tr.window // 2
     jumps = command_jumps(tr.ctrl)
-    if not len(jumps) or tr.q.shape[1] != tr.v.shape[1]:
+    if not len(jumps):
         return v, a
     if tr.qvel is not None:
         return _measured_start(tr, idx, jumps, v), a
@@ -339,8 +345,7 @@ def _measured_start(tr: Trajectory, idx: np.ndarray, jumps: np.ndarray, v: np.nd
     and there the raw measurement, unbiased, is the better start: used at each start within a
     smoothing window of a jump where the measured column's residual from its smoothing, over the
     5 samples around it, is above twice its noise (a bend, not noise)."""
-    wv = choose_window(tr.qvel, tr.sigma_qvel, tr.dt)
-    vm = _smooth(tr.qvel, wv, tr.dt, 0)
+    wv, vm = _smooth_measured(tr.qvel, tr.sigma_qvel, tr.dt)
     hw = max(tr.window, wv) // 2
     for n, i in enumerate(idx):
         if not np.any(np.abs(jumps - i) <= hw):
