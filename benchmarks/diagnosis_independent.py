@@ -164,7 +164,7 @@ class Settings:
     kept; out: results root; tag: suffix of the results folder; jobs: processes; note: a line for the
     test-split log (why this look); diagnose: diagnosis settings other than the defaults
     (``diagnose.min_gain=0.01``; tuning runs only)."""
-    split: Literal["tuning", "test", "all", "extra"] = "tuning"
+    split: Literal["tuning", "test", "all", "extra", "focus"] = "tuning"
     only: str = ""
     work: str = os.path.join("runs", "sysid_cases")
     out: str = OUT
@@ -175,7 +175,8 @@ class Settings:
 
 
 def main(args: Settings):
-    cases = [c for c in sysid_cases.build_cases(extra=args.split == "extra")
+    cases = [c for c in (sysid_cases.focus_cases() if args.split == "focus"
+                         else sysid_cases.build_cases(extra=args.split == "extra"))
              if (args.split == "all" or c.split == args.split) and args.only in c.label]
     print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(sysid_cases.build_cases())})", flush=True)
     os.makedirs(args.work, exist_ok=True)

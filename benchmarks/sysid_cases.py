@@ -18,6 +18,9 @@ so both halves cover the same conditions. ``build_cases(extra=True)`` draws a se
 same recipe from other seeds (1000 and up, split ``extra``): 144 more cases for tuning, made after
 the tuning half had been looked at many times, so a change can be checked on cases nothing was
 tuned on before it is kept. It is not part of the frozen list (its fingerprint is not the test's).
+``focus_cases()`` is a third tuning list (seeds 3000 and up, split ``focus``), made when backlash
+and payloads were the kinds the diagnosis missed most on both tuning lists: every system's
+backlash and payload targets, twice each, by the same designs and magnitudes.
 """
 from __future__ import annotations
 
@@ -36,6 +39,7 @@ INTEGRATORS = ("Euler", "implicit", "implicitfast", "RK4")
 RATES = (100.0, 200.0, 500.0, 1000.0)
 EXCITATIONS = ("multisine", "chirp", "prbs", "steps", "pd")
 EXTRA_SEED = 1000  # first seed of the extra (tuning) list: build_cases(extra=True)
+FOCUS_SEED = 3000  # first seed of the focus (tuning) list: focus_cases()
 
 
 # ------------------------------------------------------------------------------------------------
@@ -335,6 +339,8 @@ class Case:
 
     @property
     def split(self) -> str:
+        if self.seed >= FOCUS_SEED:
+            return "focus"
         if self.seed >= EXTRA_SEED:
             return "extra"
         return "tuning" if self.seed % 2 == 0 else "test"
@@ -460,6 +466,26 @@ def build_cases(extra: bool = False) -> list[Case]:
     rng.shuffle(doubles)
     for name, (a, ta), (b, tb) in doubles[:12]:
         add_pair(name, "double", (((a, ta, 1), (b, tb, 2)), ((a, ta, 2), (b, tb, 1))))
+    return cases
+
+
+def focus_cases() -> list[Case]:
+    """The focus list: a single backlash or payload on every target that can have one (not a
+    backlash on an integrating servo, which the diagnosis does not model), a pair of cases each
+    (two of the three magnitudes, two designs). Deterministic."""
+    S = systems()
+    rng = np.random.default_rng(20261127)
+    cases: list[Case] = []
+    for name, sysm in S.items():
+        integrating = {a.name for a in sysm.actuators if a.kind == "intvelocity"}
+        for e, t in applicable(sysm):
+            if e not in ("backlash", "mass_offset") or (e == "backlash" and t in integrating):
+                continue
+            m = rng.permutation(3)[:2]
+            for k in range(2):
+                seed = FOCUS_SEED + len(cases)
+                cases.append(Case(seed, name, "single", ((e, t, int(m[k])),), (),
+                                  _design(sysm, np.random.default_rng(1000 + seed))))
     return cases
 
 
