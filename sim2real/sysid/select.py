@@ -92,6 +92,7 @@ class Trial:
     passed: bool = False
     base_level: float = float("nan")
     note: str = ""
+    others: list = dataclasses.field(default_factory=list)  # more starts [(phi, start, base index)], other widths
 
 
 @dataclasses.dataclass
@@ -144,6 +145,7 @@ class SelectConfig:
     floor_step: float = 2.0
     finer: int = 4
     plausible_masses: bool = True
+    backlash_starts: int = 1
 
 
 def _paired_t(d: np.ndarray) -> float:
@@ -280,6 +282,7 @@ class Selector:
         trials = []
         for ci, c in enumerate(cands):
             best = (np.inf, None, 0)
+            per_width = {}
             grid = c.grid
             for bi, (J_t, J_v, v0, _) in enumerate(lin):
                 for gi, g in enumerate(grid):
@@ -296,16 +299,21 @@ class Selector:
                             rng = (max(min(lo_n, hi_n), c.search[0][0]), min(max(lo_n, hi_n), c.search[0][1]))
                             now = g[0]
                     phi, de = self._lin_phi(r, J_t, J_v, v0, E, rng, now)
+                    start = list(g)
+                    if de is not None:
+                        start[0] = g[0] + de
                     if phi < best[0]:
-                        start = list(g)
-                        if de is not None:
-                            start[0] = g[0] + de
                         best = (phi, tuple(start), bi)
+                    if phi < per_width.get(g[0], (np.inf,))[0]:
+                        per_width[g[0]] = (phi, tuple(start), bi)
             score = (base - best[0]) / max(base, 1e-300)
             t = Trial(c, float(score))
             t.start = best[1]
             t.base = bases[best[2]]
             t.from_nominal = best[2] > 0
+            if c.effect == "backlash" and self.cfg.backlash_starts > 1:
+                t.others = sorted((x for x in per_width.values() if x[1] != best[1]), key=lambda x: x[0])[
+                    : self.cfg.backlash_starts - 1]
             trials.append(t)
         trials.sort(key=lambda t: -t.score)
         return trials
@@ -429,6 +437,13 @@ class Selector:
         z0 = z_b.copy()
         z0[self.spec.indices(list(c.params))] = np.clip(trial.start, [r[0] for r in c.search], [r[1] for r in c.search])
         C = self.fit(M.effects + [c], z0, v_b)
+        for _, start, bi in trial.others:  # other widths of the grid: the band's fit is local
+            z_o, v_o = self._bases(M)[bi]
+            z1 = z_o.copy()
+            z1[self.spec.indices(list(c.params))] = np.clip(start, [r[0] for r in c.search], [r[1] for r in c.search])
+            C1 = self.fit(M.effects + [c], z1, v_o)
+            if C1.result.phi < C.result.phi:
+                C = C1
         # a fit that ends at the edge of the searched range: widen once and fit again
         v = float(C.z[self.spec.index(c.params[0])])
         if _at_edge(c, v):
