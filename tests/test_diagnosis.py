@@ -389,6 +389,37 @@ def test_a_pair_that_joined_together_is_judged_as_one_by_the_backward_check():
     assert M.effects == [] and "coulomb_friction@j + action_delay were dropped" in sel.pruned[0]
 
 
+def test_a_backlash_is_fitted_from_other_widths_of_its_grid_too():
+    """``SelectConfig.backlash_starts``: a band's fit moves its width little from where it starts,
+    so a backlash is also fitted from the best points at other widths of its grid (``Trial.others``,
+    set by the screen) and the lowest training objective wins; with one start the screen's best
+    point decides alone."""
+    from sim2real.sysid.candidates import Candidate
+    from sim2real.sysid.fit import Result
+    from sim2real.sysid.select import Model, Trial
+
+    B = Candidate("backlash", "m", ("backlash:m",), ((0.004,), (0.011,), (0.031,)), (1.0,), ((0.001, 0.06),))
+    sel, fit = _selector({frozenset(): (5000.0, np.full(10, 40.0))})
+    sel.spec = types.SimpleNamespace(index=lambda name: 0, indices=lambda names: [0])
+    truth = 0.03
+
+    def local_fit(effects, z0, v0, extra=()):   # a fit that ends near its start: a local minimum
+        w = float(z0[0])
+        res = Result(np.array([w]), np.zeros((1, 1)), [], {}, 1000.0 * abs(np.log(w / truth)) + 1.0, 0.0, 1000, [], 1)
+        return Model(list(effects), res, None, [])
+
+    sel.fit = local_fit
+    M = fit([], 0, 0)
+    sel._bases = lambda M: [(np.zeros(1), np.zeros(1))]
+    for starts, want in ((1, 0.004), (3, 0.031)):
+        trial = Trial(B, 0.5)
+        trial.start, trial.base = (0.004,), (np.zeros(1), np.zeros(1))     # the screen's best point
+        if starts > 1:
+            trial.others = [(2.0, (0.031,), 0), (3.0, (0.011,), 0)][: starts - 1]
+        out = sel._try(M, trial)
+        assert out.model.z[0] == pytest.approx(want)
+
+
 def test_no_effect_is_named_on_a_misfit_the_physics_step_can_explain():
     """``SelectConfig.floor_step``: a model whose validation misfit (per residual) is below what the
     physics step alone causes (``step_level``) has nothing left that an effect could be trusted

@@ -80,6 +80,8 @@ class DiagnoseConfig:
       max_effects: at most this many effects are named.
       plausible_masses: of the effects that pass in a round, one whose fit keeps every re-fitted
         body mass within ``FAR_MASS`` of the model's is preferred (``SelectConfig``).
+      backlash_starts: a backlash is fitted from this many widths of its grid, the best kept
+        (``SelectConfig``).
       heldout_gain_first: the first effect kept must lower the held-out error (the report's
         NRMSE) by at least this fraction against the nominal re-fit ...
       heldout_gain: ... and every later one by this fraction against the model before it; the
@@ -133,7 +135,6 @@ class DiagnoseConfig:
     max_effects: int = SelectConfig.max_effects
     plausible_masses: bool = SelectConfig.plausible_masses
     backlash_starts: int = SelectConfig.backlash_starts
-    floor_starts: str = "spread"
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
     energy_explained: float = 0.5
@@ -158,8 +159,6 @@ class DiagnoseConfig:
             raise ValueError(f"val_fraction={self.val_fraction}: must be between 0.05 and 0.6")
         if self.coulomb_eps <= 0:
             raise ValueError("coulomb_eps must be > 0")
-        if self.floor_starts not in ("spread", "judged"):
-            raise ValueError(f"floor_starts={self.floor_starts!r}: must be 'spread' or 'judged'")
         if self.backlash_starts < 1:
             raise ValueError(f"backlash_starts={self.backlash_starts}: must be >= 1")
         if self.finer < 0:
@@ -298,13 +297,11 @@ def _native_runs(system: System, trajs, n: int, steps: int, starts: int = 3, sub
     d = mujoco.MjData(m)
     out = []
     if at is None:
-        at = [(i, s, None) for i, tr in enumerate(trajs)
+        at = [(i, s, velocity_state(tr.v[s], tr.a[s], h)) for i, tr in enumerate(trajs)
               for s in np.linspace(0, max(len(tr) - steps - 1, 0), starts).astype(int)]
     try:
         for i, s, v in at:
-            tr = trajs[i]
-            v = velocity_state(tr.v[s], tr.a[s], h) if v is None else v
-            out.append(_native_rollout(m, d, tr, s, steps, sub, tr.q[s], v, with_qvel))
+            out.append(_native_rollout(m, d, trajs[i], s, steps, sub, trajs[i].q[s], v, with_qvel))
     finally:
         m.opt.timestep = system.h
     return np.stack(out)
@@ -500,9 +497,6 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             fitter.v_hat = fitter.velocities(spec.default.copy(), fitter.v_hat, used, iters=8)[0]
             floor_seconds = H * dt
             at = [(i, int(sh.tiles.local[t]), fitter.v_hat[t]) for i, mine in enumerate(floor_from) for t in mine]
-        if at is None and cfg.floor_starts == "judged":
-            # the starts of the validation segments (the ones candidates are judged on), velocities from the data
-            at = [(int(sh.tiles.traj[t]), int(sh.tiles.local[t]), None) for t in sh.tiles.of("val")]
         step_level = discretization_level(system, trajs[: len(train)], sh, seconds=floor_seconds, at=at)
 
         def finer(k: int):

@@ -92,7 +92,7 @@ class Trial:
     passed: bool = False
     base_level: float = float("nan")
     note: str = ""
-    others: list = dataclasses.field(default_factory=list)  # more starts [(phi, start, base index)], other widths
+    others: list = dataclasses.field(default_factory=list)  # more starts: [(phi, start, base index)] at other widths
 
 
 @dataclasses.dataclass
@@ -131,6 +131,13 @@ class SelectConfig:
         gets its masses roughly right, and a mass 50x off stands in for physics the effect leaves
         unexplained (a flywheel whose backlash a motor lag "explained" with the wheel at 1/58 of
         its mass). Only where none passes with plausible masses does the best of the rest join.
+      backlash_starts: a backlash is fitted from the screen's best point and from the best
+        points at this many widths of its grid in all, and the fit with the lowest training
+        objective is kept. The band's effect on the motion changes in steps as it widens (the
+        motor side's impacts come and go), so a fit moves its width little from where it starts:
+        the screen's best point can hold it at the grid's narrowest width where the plant's is 8
+        times wider (the focus list's 3013). A payload is fitted from its best point alone: from
+        three, its masses moved further from the truth (``tuning.md`` steps 27 and 45).
     """
 
     min_gain: float = 0.05
@@ -145,7 +152,7 @@ class SelectConfig:
     floor_step: float = 2.0
     finer: int = 4
     plausible_masses: bool = True
-    backlash_starts: int = 1
+    backlash_starts: int = 3
 
 
 def _paired_t(d: np.ndarray) -> float:
