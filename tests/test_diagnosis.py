@@ -434,8 +434,9 @@ def test_no_effect_is_named_on_a_misfit_the_physics_step_can_explain():
 def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     """``SelectConfig.finer``: a candidate that halves the validation error of a model already
     misfitting by less than the physics step alone causes is simulated again (both models) at a
-    finer step: named if it keeps its gain there (a real effect), not if the gain goes with the
-    step (an effect that took up the integrator's error), nor when the check is off."""
+    finer step: named if it keeps its gain there (a real effect), also where that step's own
+    measured floor is above the model's whole misfit; not if the gain goes with the step (an
+    effect that took up the integrator's error), nor when the check is off."""
     from sim2real.sysid.candidates import Candidate
 
     A = Candidate("backlash", "m", ("backlash:m",), ((0.1,),), (1.0,), ((0.0, 1.0),))
@@ -452,12 +453,15 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     assert ok and ratio < 0.6 and "4x finer step" in note and "passes" in note
     sel._fine, sel._finer = None, lambda k: (_Fine([base * 0.5, half], calls), 0.001)   # the gain was the step's
     assert not sel._accept(M, C, first=True)[0]
+    # the gain kept, the finer step's own measured floor above the whole misfit: still named
+    sel._fine, sel._finer = None, lambda k: (_Fine([base, half * 1.05], calls), 10.0)
+    assert sel._accept(M, C, first=True)[0]
     sel._fine, sel.cfg = None, dataclasses.replace(sel.cfg, finer=0)   # off: the floor decides
     assert not sel._accept(M, C, first=True)[0]
-    assert calls == [2, 2]
+    assert calls == [2, 2, 2]
     # above the floor no finer simulation is needed
     sel.step_level = 0.01
-    assert sel._accept(M, C, first=True)[0] and calls == [2, 2]
+    assert sel._accept(M, C, first=True)[0] and calls == [2, 2, 2]
 
 
 def test_a_delay_shorter_than_one_physics_step_is_judged_again_at_a_finer_step():

@@ -75,7 +75,7 @@ class DiagnoseConfig:
         (measured per diagnosis: ``discretization_level``) ...
       strong: ... unless the effect's validation ratio is this low or lower.
       finer: an effect that passes every test but ``floor_step`` is judged again with a physics
-        step this many times shorter, and passes if it passes there (0 or 1: it fails).
+        step this many times shorter, and passes if its gain holds there (0 or 1: it fails).
       top: candidates fitted in full per selection round (the best by the screen).
       max_effects: at most this many effects are named.
       plausible_masses: of the effects that pass in a round, one whose fit keeps every re-fitted
