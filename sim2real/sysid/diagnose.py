@@ -501,14 +501,14 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
 
         def finer(k: int):
             """The same segments simulated with a physics step ``k`` times shorter (built only when
-            a candidate is blocked by the step's floor alone): their fitter and that step's floor."""
+            a candidate is blocked by the step's floor alone): their fitter."""
             fine = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay,
                           substeps=system.substeps * k)
             sh_f = Shooting(fine, trajs, H, heldout=heldout_idx, val_fraction=cfg.val_fraction)
             f_fine = Fitter(sh_f, fitter.scales)
             if rough_any:  # the same segments: their refined start velocities
                 f_fine.v_hat, f_fine.dv = fitter.v_hat.copy(), fitter.dv
-            return f_fine, discretization_level(fine, trajs[: len(train)], sh_f, seconds=floor_seconds, at=at)
+            return f_fine
         bar.step(text=f"compiling the simulator ({sh.S} segments of {H} samples)")
         z0 = spec.default.copy()
         check_tiles = sh.tiles.of("heldout") if held else sh.tiles.of("val")
