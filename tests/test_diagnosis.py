@@ -410,12 +410,11 @@ def test_a_backlash_is_fitted_from_other_widths_of_its_grid_too():
 
     sel.fit = local_fit
     M = fit([], 0, 0)
-    sel._bases = lambda M: [(np.zeros(1), np.zeros(1))]
     for starts, want in ((1, 0.004), (3, 0.031)):
         trial = Trial(B, 0.5)
         trial.start, trial.base = (0.004,), (np.zeros(1), np.zeros(1))     # the screen's best point
         if starts > 1:
-            trial.others = [(2.0, (0.031,), 0), (3.0, (0.011,), 0)][: starts - 1]
+            trial.others = [((0.031,), trial.base), ((0.011,), trial.base)][: starts - 1]
         out = sel._try(M, trial)
         assert out.model.z[0] == pytest.approx(want)
 

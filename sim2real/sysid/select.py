@@ -92,7 +92,7 @@ class Trial:
     passed: bool = False
     base_level: float = float("nan")
     note: str = ""
-    others: list = dataclasses.field(default_factory=list)  # more starts: [(phi, start, base index)] at other widths
+    others: list = dataclasses.field(default_factory=list)  # more starts: [(start, (z, v) base)] at other widths
 
 
 @dataclasses.dataclass
@@ -325,8 +325,8 @@ class Selector:
             t.base = bases[best[2]]
             t.from_nominal = best[2] > 0
             if c.effect == "backlash" and self.cfg.backlash_starts > 1:
-                t.others = sorted((x for x in per_width.values() if x[1] != best[1]), key=lambda x: x[0])[
-                    : self.cfg.backlash_starts - 1]
+                more = sorted((x for x in per_width.values() if x[1] != best[1]), key=lambda x: x[0])
+                t.others = [(start, bases[bi]) for _, start, bi in more[: self.cfg.backlash_starts - 1]]
             trials.append(t)
         trials.sort(key=lambda t: -t.score)
         return trials
@@ -447,15 +447,15 @@ class Selector:
     def _try(self, M: Model, trial: Trial) -> Trial:
         """Fit the candidate on top of ``M`` (validation comes later, batched: ``_judge_all``)."""
         c = trial.candidate
-        z_b, v_b = getattr(trial, "base", (M.z, M.result.v0))
-        z0 = z_b.copy()
-        z0[self.spec.indices(list(c.params))] = np.clip(trial.start, [r[0] for r in c.search], [r[1] for r in c.search])
-        C = self.fit(M.effects + [c], z0, v_b)
-        for _, start, bi in trial.others:  # other widths of the grid: the band's fit is local
-            z_o, v_o = self._bases(M)[bi]
-            z1 = z_o.copy()
-            z1[self.spec.indices(list(c.params))] = np.clip(start, [r[0] for r in c.search], [r[1] for r in c.search])
-            C1 = self.fit(M.effects + [c], z1, v_o)
+
+        def fit_from(start, base):
+            z0 = base[0].copy()
+            z0[self.spec.indices(list(c.params))] = np.clip(start, [r[0] for r in c.search], [r[1] for r in c.search])
+            return self.fit(M.effects + [c], z0, base[1])
+
+        C = fit_from(trial.start, getattr(trial, "base", (M.z, M.result.v0)))
+        for start, base in trial.others:  # other widths of the grid: the band's fit is local
+            C1 = fit_from(start, base)
             if C1.result.phi < C.result.phi:
                 C = C1
         # a fit that ends at the edge of the searched range: widen once and fit again
