@@ -142,7 +142,11 @@ class SelectConfig:
         objective is kept. The band's effect on the motion changes in steps as it widens (the
         motor side's impacts come and go), so a fit moves its width little from where it starts:
         the screen's best point can hold it at the grid's narrowest width where the plant's is 8
-        times wider (the focus list's 3013). A payload is fitted from its best point alone: from
+        times wider (the focus list's 3013). The other starts are compliant meshes
+        (``other_starts``): fitted from a rigid one, width, inertia and stiffness stay where they
+        start; from a compliant one they move to the plant's (the focus list's 3025 and 3033:
+        validation ratio 1.7 and 0.97 from the screen's rigid points, 0.09 and 0.02 from its
+        compliant ones; ``tuning.md`` step 47). A payload is fitted from its best point alone: from
         three, its masses moved further from the truth (``tuning.md`` steps 27 and 45).
     """
 
@@ -166,6 +170,21 @@ def _paired_t(d: np.ndarray) -> float:
     if len(d) < 3 or np.std(d) == 0:
         return float("inf") if np.mean(d) > 0 else 0.0
     return float(np.mean(d) / (np.std(d, ddof=1) / np.sqrt(len(d))))
+
+
+def other_starts(points: list, best: tuple, n: int) -> list:
+    """A backlash's starts besides the screen's best point ``best``: the best point at each other
+    width of its grid, at most ``n``, lowest linearised objective first. ``points``: ``[(phi,
+    start, base index, grid point)]``, a grid point being ``(width, inertia[, stiffness])``.
+    Where the grid has a stiffness, only compliant meshes (stiffness > 0) start a fit: a rigid
+    mesh's fit does not move from its start (its impacts make the objective a staircase in the
+    width, and the stiffness cannot leave 0, which stands for rigid), while one from a compliant
+    point moves width, inertia and stiffness to the plant's (``SelectConfig.backlash_starts``)."""
+    per_width = {}
+    for phi, start, bi, g in points:
+        if (len(g) < 3 or g[2] > 0) and phi < per_width.get(g[0], (np.inf,))[0]:
+            per_width[g[0]] = (phi, start, bi)
+    return sorted((x for x in per_width.values() if x[1] != best), key=lambda x: x[0])[:n]
 
 
 def _at_edge(c: Candidate, v: float) -> bool:
@@ -295,7 +314,7 @@ class Selector:
         trials = []
         for ci, c in enumerate(cands):
             best = (np.inf, None, 0)
-            per_width = {}
+            points = []
             grid = c.grid
             for bi, (J_t, J_v, v0, _) in enumerate(lin):
                 for gi, g in enumerate(grid):
@@ -317,16 +336,15 @@ class Selector:
                         start[0] = g[0] + de
                     if phi < best[0]:
                         best = (phi, tuple(start), bi)
-                    if phi < per_width.get(g[0], (np.inf,))[0]:
-                        per_width[g[0]] = (phi, tuple(start), bi)
+                    points.append((phi, tuple(start), bi, g))
             score = (base - best[0]) / max(base, 1e-300)
             t = Trial(c, float(score))
             t.start = best[1]
             t.base = bases[best[2]]
             t.from_nominal = best[2] > 0
             if c.effect == "backlash" and self.cfg.backlash_starts > 1:
-                more = sorted((x for x in per_width.values() if x[1] != best[1]), key=lambda x: x[0])
-                t.others = [(start, bases[bi]) for _, start, bi in more[: self.cfg.backlash_starts - 1]]
+                t.others = [(start, bases[bi]) for _, start, bi in
+                            other_starts(points, best[1], self.cfg.backlash_starts - 1)]
             trials.append(t)
         trials.sort(key=lambda t: -t.score)
         return trials
