@@ -419,23 +419,22 @@ def test_a_backlash_is_fitted_from_other_widths_of_its_grid_too():
         assert out.model.z[0] == pytest.approx(want)
 
 
-def test_a_backlash_starts_again_from_compliant_meshes_only():
-    """``select.other_starts``: the other starts are the best point at each other width, compliant
+def test_a_backlash_starts_from_compliant_meshes_only():
+    """``select.band_starts``: a backlash's fits start from the best point at each width, compliant
     meshes only where the grid has a stiffness (a rigid mesh's fit stays where it starts); without
     a stiffness every point may start a fit."""
-    from sim2real.sysid.select import other_starts
+    from sim2real.sysid.select import band_starts
 
     pts = [(1.0, (0.004, 1e-4, 0.0), 0, (0.004, 1e-4, 0.0)),      # the screen's best: rigid
            (2.0, (0.004, 1e-4, 50.0), 0, (0.004, 1e-4, 50.0)),
-           (1.5, (0.01, 1e-4, 0.0), 1, (0.01, 1e-4, 0.0)),         # rigid: never another start
+           (1.5, (0.01, 1e-4, 0.0), 1, (0.01, 1e-4, 0.0)),         # rigid: never a start
            (3.0, (0.01, 1e-4, 50.0), 1, (0.01, 1e-4, 50.0)),
            (2.5, (0.03, 1e-4, 50.0), 0, (0.03, 1e-4, 50.0))]
-    got = other_starts(pts, (0.004, 1e-4, 0.0), 2)
-    assert [s for _, s, _ in got] == [(0.004, 1e-4, 50.0), (0.03, 1e-4, 50.0)]
-    assert [b for _, _, b in other_starts(pts, (0.004, 1e-4, 0.0), 5)] == [0, 0, 1]
+    assert [s for _, s, _ in band_starts(pts, 2)] == [(0.004, 1e-4, 50.0), (0.03, 1e-4, 50.0)]
+    assert [b for _, _, b in band_starts(pts, 5)] == [0, 0, 1]
     two = [(1.0, (0.004, 1e-4), 0, (0.004, 1e-4)), (1.5, (0.01, 1e-4), 0, (0.01, 1e-4)),
            (1.2, (0.01, 1e-3), 0, (0.01, 1e-3))]
-    assert [s for _, s, _ in other_starts(two, (0.004, 1e-4), 2)] == [(0.01, 1e-3)]
+    assert [s for _, s, _ in band_starts(two, 2)] == [(0.004, 1e-4), (0.01, 1e-3)]
 
 
 def test_no_effect_is_named_on_a_misfit_the_physics_step_can_explain():

@@ -137,17 +137,16 @@ class SelectConfig:
         gets its masses roughly right, and a mass 50x off stands in for physics the effect leaves
         unexplained (a flywheel whose backlash a motor lag "explained" with the wheel at 1/58 of
         its mass). Only where none passes with plausible masses does the best of the rest join.
-      backlash_starts: a backlash is fitted from the screen's best point and from the best
-        points at this many widths of its grid in all, and the fit with the lowest training
-        objective is kept. The band's effect on the motion changes in steps as it widens (the
-        motor side's impacts come and go), so a fit moves its width little from where it starts:
-        the screen's best point can hold it at the grid's narrowest width where the plant's is 8
-        times wider (the focus list's 3013). The other starts are compliant meshes
-        (``other_starts``): fitted from a rigid one, width, inertia and stiffness stay where they
-        start; from a compliant one they move to the plant's (the focus list's 3025 and 3033:
-        validation ratio 1.7 and 0.97 from the screen's rigid points, 0.09 and 0.02 from its
-        compliant ones; ``tuning.md`` step 47). A payload is fitted from its best point alone: from
-        three, its masses moved further from the truth (``tuning.md`` steps 27 and 45).
+      backlash_starts: a backlash is fitted from the best points at this many widths of its grid,
+        and the fit with the lowest training objective is kept. The band's effect on the motion
+        changes in steps as it widens (the motor side's impacts come and go), so a fit moves its
+        width little from where it starts: one start can hold it at the grid's narrowest width
+        where the plant's is 8 times wider (the focus list's 3013). Every start is a compliant
+        mesh (``band_starts``): fitted from a rigid one, width, inertia and stiffness stay where
+        they start; from a compliant one they move to the plant's (the focus list's 3025 and
+        3033: validation ratio 1.7 and 0.97 from the screen's rigid points, 0.09 and 0.02 from
+        its compliant ones; ``tuning.md`` steps 47-48). A payload is fitted from its best point
+        alone: from three, its masses moved further from the truth (``tuning.md`` steps 27 and 45).
     """
 
     min_gain: float = 0.05
@@ -172,19 +171,20 @@ def _paired_t(d: np.ndarray) -> float:
     return float(np.mean(d) / (np.std(d, ddof=1) / np.sqrt(len(d))))
 
 
-def other_starts(points: list, best: tuple, n: int) -> list:
-    """A backlash's starts besides the screen's best point ``best``: the best point at each other
-    width of its grid, at most ``n``, lowest linearised objective first. ``points``: ``[(phi,
+def band_starts(points: list, n: int) -> list:
+    """Where a backlash's fits start: the best point at each width of its grid, at most ``n``,
+    lowest linearised objective first (``[(phi, start, base index)]``). ``points``: ``[(phi,
     start, base index, grid point)]``, a grid point being ``(width, inertia[, stiffness])``.
     Where the grid has a stiffness, only compliant meshes (stiffness > 0) start a fit: a rigid
     mesh's fit does not move from its start (its impacts make the objective a staircase in the
     width, and the stiffness cannot leave 0, which stands for rigid), while one from a compliant
-    point moves width, inertia and stiffness to the plant's (``SelectConfig.backlash_starts``)."""
+    point moves width, inertia and stiffness to the plant's. The rigid points still score the
+    candidate in the screen (``SelectConfig.backlash_starts``)."""
     per_width = {}
     for phi, start, bi, g in points:
         if (len(g) < 3 or g[2] > 0) and phi < per_width.get(g[0], (np.inf,))[0]:
             per_width[g[0]] = (phi, start, bi)
-    return sorted((x for x in per_width.values() if x[1] != best), key=lambda x: x[0])[:n]
+    return sorted(per_width.values(), key=lambda x: x[0])[:n]
 
 
 def _at_edge(c: Candidate, v: float) -> bool:
@@ -342,9 +342,10 @@ class Selector:
             t.start = best[1]
             t.base = bases[best[2]]
             t.from_nominal = best[2] > 0
-            if c.effect == "backlash" and self.cfg.backlash_starts > 1:
-                t.others = [(start, bases[bi]) for _, start, bi in
-                            other_starts(points, best[1], self.cfg.backlash_starts - 1)]
+            if c.effect == "backlash" and (starts := band_starts(points, max(self.cfg.backlash_starts, 1))):
+                (_, t.start, bi), more = starts[0], starts[1:]
+                t.base, t.from_nominal = bases[bi], bi > 0
+                t.others = [(start, bases[b]) for _, start, b in more]
             trials.append(t)
         trials.sort(key=lambda t: -t.score)
         return trials
