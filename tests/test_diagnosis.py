@@ -392,8 +392,8 @@ def test_a_pair_that_joined_together_is_judged_as_one_by_the_backward_check():
 def test_a_backlash_is_fitted_from_other_widths_of_its_grid_too():
     """``SelectConfig.backlash_starts``: a band's fit moves its width little from where it starts,
     so a backlash is also fitted from the best points at other widths of its grid (``Trial.others``,
-    set by the screen) and the lowest training objective wins; with one start the screen's best
-    point decides alone."""
+    set by the screen, ``select.band_starts``) and the lowest training objective wins; with one
+    start the first (``Trial.start``) decides alone."""
     from sim2real.sysid.candidates import Candidate
     from sim2real.sysid.fit import Result
     from sim2real.sysid.select import Model, Trial
@@ -412,7 +412,7 @@ def test_a_backlash_is_fitted_from_other_widths_of_its_grid_too():
     M = fit([], 0, 0)
     for starts, want in ((1, 0.004), (3, 0.031)):
         trial = Trial(B, 0.5)
-        trial.start, trial.base = (0.004,), (np.zeros(1), np.zeros(1))     # the screen's best point
+        trial.start, trial.base = (0.004,), (np.zeros(1), np.zeros(1))     # the first start
         if starts > 1:
             trial.others = [((0.031,), trial.base), ((0.011,), trial.base)][: starts - 1]
         out = sel._try(M, trial)

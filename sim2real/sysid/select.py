@@ -290,7 +290,8 @@ class Selector:
 
     def screen(self, M: Model, cands: list[Candidate]) -> list[Trial]:
         """Score every candidate at the current model ``M`` (see the module docstring), from each
-        of ``_bases(M)``; a candidate keeps the base and start with the lowest linearised objective."""
+        of ``_bases(M)``; a candidate keeps the base and start with the lowest linearised objective
+        (a backlash: among its compliant meshes, ``band_starts``; its score counts every point)."""
         f, tiles = self.f, self.fit_tiles
         bases = self._bases(M)
         lin = []
