@@ -409,6 +409,7 @@ def test_a_backlash_is_fitted_from_other_widths_of_its_grid_too():
         return Model(list(effects), res, None, [])
 
     sel.fit = local_fit
+    sel.cfg = dataclasses.replace(sel.cfg, band_scan=0)   # the starts alone (the scan: the test below)
     M = fit([], 0, 0)
     for starts, want in ((1, 0.004), (3, 0.031)):
         trial = Trial(B, 0.5)
@@ -417,6 +418,39 @@ def test_a_backlash_is_fitted_from_other_widths_of_its_grid_too():
             trial.others = [((0.031,), trial.base), ((0.011,), trial.base)][: starts - 1]
         out = sel._try(M, trial)
         assert out.model.z[0] == pytest.approx(want)
+
+
+def test_a_band_fit_moves_on_from_the_best_width_of_a_scan():
+    """``SelectConfig.band_scan``: a band's fit ends near its start (the objective is a staircase
+    in the width), so after the starts' fits a fine scan of widths is simulated at once and the fit
+    is run again from the best; off, the fit stays at the grid's width nearest its start."""
+    from sim2real.sysid.candidates import Candidate
+    from sim2real.sysid.fit import Result
+    from sim2real.sysid.select import Model, Trial
+
+    B = Candidate("backlash", "m", ("backlash:m",), ((0.004,), (0.011,)), (1.0,), ((0.001, 0.06),))
+    sel, fit = _selector({frozenset(): (5000.0, np.full(10, 40.0))})
+    sel.spec = types.SimpleNamespace(index=lambda name: 0, indices=lambda names: [0])
+    truth = 0.03
+
+    def objective(w):
+        return 1000.0 * abs(np.log(w / truth)) + 1.0
+
+    def local_fit(effects, z0, v0, extra=()):   # a fit that ends where it starts
+        w = float(z0[0])
+        return Model(list(effects), Result(np.array([w]), np.zeros((1, 1)), [], {}, objective(w), 0.0, 1000, [], 1), None, [])
+
+    sel.fit = local_fit
+    sel.f = types.SimpleNamespace(   # the scan's simulations: residuals whose squares sum to the objective
+        residuals=lambda zs, v0s, tiles: np.sqrt([[[objective(float(z[0]))]] for z in zs]),
+        phi=lambda r, v0, tiles: float(np.sum(r**2)))
+    M = fit([], 0, 0)
+    for scan, near in ((0, 0.011), (12, truth)):
+        sel.cfg = dataclasses.replace(sel.cfg, band_scan=scan, backlash_starts=1)
+        trial = Trial(B, 0.5)
+        trial.start, trial.base = (0.011,), (np.zeros(1), np.zeros(1))
+        w = float(sel._try(M, trial).model.z[0])
+        assert abs(np.log(w / near)) < 0.2, (scan, w)
 
 
 def test_a_backlash_starts_from_compliant_meshes_only():

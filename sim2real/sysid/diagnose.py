@@ -82,6 +82,8 @@ class DiagnoseConfig:
         body mass within ``FAR_MASS`` of the model's is preferred (``SelectConfig``).
       backlash_starts: a backlash is fitted from this many widths of its grid, the best kept
         (``SelectConfig``).
+      band_scan: then this many widths over its range are simulated together, and the fit started
+        again from one that fits better (0: off; ``SelectConfig``).
       heldout_gain_first: the first effect kept must lower the held-out error (the report's
         NRMSE) by at least this fraction against the nominal re-fit ...
       heldout_gain: ... and every later one by this fraction against the model before it; the
@@ -135,6 +137,7 @@ class DiagnoseConfig:
     max_effects: int = SelectConfig.max_effects
     plausible_masses: bool = SelectConfig.plausible_masses
     backlash_starts: int = SelectConfig.backlash_starts
+    band_scan: int = SelectConfig.band_scan
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
     energy_explained: float = 0.5
@@ -163,6 +166,8 @@ class DiagnoseConfig:
             raise ValueError(f"backlash_starts={self.backlash_starts}: must be >= 1")
         if self.finer < 0:
             raise ValueError(f"finer={self.finer}: must be >= 0 (0: off)")
+        if self.band_scan == 1 or self.band_scan < 0:
+            raise ValueError(f"band_scan={self.band_scan}: must be 0 (off) or >= 2 widths")
         for key in ("num_windows", "top", "max_effects"):
             if getattr(self, key) < 1:
                 raise ValueError(f"{key}={getattr(self, key)}: must be >= 1")
@@ -532,7 +537,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                        SelectConfig(min_gain=cfg.min_gain, min_t=cfg.min_t, min_gain_first=cfg.min_gain_first,
                                     floor_level=cfg.floor_level, strong=cfg.strong, top=cfg.top,
                                     max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer,
-                                    plausible_masses=cfg.plausible_masses, backlash_starts=cfg.backlash_starts),
+                                    plausible_masses=cfg.plausible_masses, backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
                        allowed=cfg.expressible or None)
         final, steps = sel.run()

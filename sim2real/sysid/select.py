@@ -147,6 +147,11 @@ class SelectConfig:
         3033: validation ratio 1.7 and 0.97 from the screen's rigid points, 0.09 and 0.02 from
         its compliant ones; ``tuning.md`` steps 47-48). A payload is fitted from its best point
         alone: from three, its masses moved further from the truth (``tuning.md`` steps 27 and 45).
+      band_scan: after those fits, this many widths over the band's searched range are simulated
+        at once with the best fit's other parameters; if one fits the segments better, the fit
+        starts again from it (0: no scan). The grid's widths are 2.5x apart, so a plant's band
+        between two of them can be out of every start's reach (the extra list's 1004: fitted at
+        0.0095 rad against 0.03, a motor lag beside it taking up the rest; ``tuning.md`` step 50).
     """
 
     min_gain: float = 0.05
@@ -162,6 +167,7 @@ class SelectConfig:
     finer: int = 4
     plausible_masses: bool = True
     backlash_starts: int = 3
+    band_scan: int = 12
 
 
 def _paired_t(d: np.ndarray) -> float:
@@ -478,6 +484,8 @@ class Selector:
             C1 = fit_from(start, base)
             if C1.result.phi < C.result.phi:
                 C = C1
+        if c.effect == "backlash" and self.cfg.band_scan:
+            C = self._scan_width(M, c, C)
         # a fit that ends at the edge of the searched range: widen once and fit again
         v = float(C.z[self.spec.index(c.params[0])])
         if _at_edge(c, v):
@@ -491,6 +499,23 @@ class Selector:
                 trial.note += f"; still at the edge after widening ({v2:.4g}): the value is a bound, not an estimate"
         trial.model = C
         return trial
+
+    def _scan_width(self, M: Model, c: Candidate, C: Model) -> Model:
+        """The band's fit moved on from the best width of a fine scan: ``band_scan`` widths over
+        the searched range, the fit's other parameters and start velocities held, simulated
+        together; when one predicts the fitted segments better, the fit is run again from it."""
+        i = self.spec.index(c.params[0])
+        widths = np.geomspace(c.search[0][0], c.search[0][1], self.cfg.band_scan)
+        zs = np.repeat(C.z[None], len(widths), 0)
+        zs[:, i] = widths
+        r = self.f.residuals(zs, np.repeat(C.result.v0[None], len(widths), 0), self.fit_tiles)
+        phis = [self.f.phi(rr, C.result.v0, self.fit_tiles) for rr in r]
+        k = int(np.argmin(phis))
+        if phis[k] < C.result.phi:
+            C2 = self.fit(M.effects + [c], zs[k], C.result.v0)
+            if C2.result.phi < C.result.phi:
+                return C2
+        return C
 
     def _judge_all(self, M: Model, trials: list[Trial]) -> None:
         self.validate([t.model for t in trials])
