@@ -396,6 +396,11 @@ def _design(system: System, rng: np.random.Generator, seconds: float | None = No
                   str(rng.choice(exc)), noise, quant, bool(rng.uniform() < 0.5))
 
 
+def _case(seed: int, S: dict, system: str, kind: str, effects: tuple, nominal: tuple) -> Case:
+    """One case; its design is drawn from its own seed, so a case does not depend on the list."""
+    return Case(seed, system, kind, effects, nominal, _design(S[system], np.random.default_rng(1000 + seed)))
+
+
 def build_cases(extra: bool = False) -> list[Case]:
     """The frozen case list (``extra``: the second list, same recipe, other seeds). Deterministic:
     the same list on every machine."""
@@ -406,9 +411,7 @@ def build_cases(extra: bool = False) -> list[Case]:
 
     def add_pair(system, kind, effects_pair, nominal_pair=((), ())):
         for k in range(2):
-            seed = first + len(cases)
-            r = np.random.default_rng(1000 + seed)
-            cases.append(Case(seed, system, kind, effects_pair[k], nominal_pair[k], _design(S[system], r)))
+            cases.append(_case(first + len(cases), S, system, kind, effects_pair[k], nominal_pair[k]))
 
     # single effects: every applicable (effect, target) of a rotating subset of systems, in pairs
     singles = []
@@ -483,9 +486,7 @@ def focus_cases() -> list[Case]:
                 continue
             m = rng.permutation(3)[:2]
             for k in range(2):
-                seed = FOCUS_SEED + len(cases)
-                cases.append(Case(seed, name, "single", ((e, t, int(m[k])),), (),
-                                  _design(sysm, np.random.default_rng(1000 + seed))))
+                cases.append(_case(FOCUS_SEED + len(cases), S, name, "single", ((e, t, int(m[k])),), ()))
     return cases
 
 

@@ -11,6 +11,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from sim2real.sysid import select
 from sim2real.sysid.diagnose import DiagnoseConfig, diagnose, far_masses, relative_change
 from sim2real.sysid.trajectory import choose_window, noise_std
 
@@ -294,7 +295,7 @@ class _Stub:
         self.cfg = SelectConfig()
         self.fit_tiles, self.val_tiles = np.arange(10), np.arange(10, 20)
         self.pruned, self.step_level, self.progress, self.units = [], 0.0, lambda text: None, []
-        self._finer, self._fine = None, None
+        self._finer, self._fine = None, select._UNBUILT
         # one parameter vector entry (an effect's own value, where a test sets it); 1 ms samples and steps
         self.spec = types.SimpleNamespace(index=lambda name: 0)
         self.f = types.SimpleNamespace(sh=types.SimpleNamespace(dt=0.001, sys=types.SimpleNamespace(h=0.001)))
@@ -502,9 +503,9 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     sel._finer = lambda k: _Fine([base, half * 1.05], calls)     # the gain stays: named
     ok, ratio, t, note = sel._accept(M, C, first=True)
     assert ok and ratio < 0.6 and "4x finer step" in note and "passes" in note
-    sel._fine, sel._finer = None, lambda k: _Fine([base * 0.5, half], calls)   # the gain was the step's
+    sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base * 0.5, half], calls)   # the gain was the step's
     assert not sel._accept(M, C, first=True)[0]
-    sel._fine, sel.cfg = None, dataclasses.replace(sel.cfg, finer=0)   # off: the floor decides
+    sel._fine, sel.cfg = select._UNBUILT, dataclasses.replace(sel.cfg, finer=0)   # off: the floor decides
     assert not sel._accept(M, C, first=True)[0]
     assert calls == [2, 2]
     # above the floor no finer simulation is needed
@@ -531,11 +532,11 @@ def test_a_delay_shorter_than_one_physics_step_is_judged_again_at_a_finer_step()
     sel._finer = lambda k: _Fine([base, base * 1.01], calls)    # the gain goes with the step
     ok, ratio, t, note = sel._accept(M, C, first=False)
     assert not ok and ratio < 0.6 and "0.4 ms, shorter than the 1 ms physics step" in note and note.endswith("fails")
-    sel._fine, sel._finer = None, lambda k: _Fine([base, better * 1.05], calls)   # it stays: named
+    sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base, better * 1.05], calls)   # it stays: named
     assert sel._accept(M, C, first=False)[0] and calls == [2, 2]
     fits[frozenset({"action_delay"})] = (3000.0, better, 0.0, 3.0)      # three samples: judged as it is
     assert sel._accept(M, fit([D], 0, 0), first=False)[0] and calls == [2, 2]
-    sel._fine, sel.cfg = None, dataclasses.replace(sel.cfg, finer=0)    # the check off: the floors decide
+    sel._fine, sel.cfg = select._UNBUILT, dataclasses.replace(sel.cfg, finer=0)    # the check off: the floors decide
     assert sel._accept(M, C, first=False)[0] and calls == [2, 2]
 
 

@@ -170,6 +170,9 @@ class SelectConfig:
     band_scan: int = 12
 
 
+_UNBUILT = object()  # the finer fitter before its first use (it may be None once built)
+
+
 def _paired_t(d: np.ndarray) -> float:
     """One-sample t-statistic of the per-segment improvements ``d`` (inf/0 when they do not vary)."""
     if len(d) < 3 or np.std(d) == 0:
@@ -212,7 +215,7 @@ class Selector:
         which decides whether a friction may get a level per direction."""
         self.f, self.nominal, self.cands, self.cfg = fitter, list(nominal), list(candidates), cfg
         self.step_level = float(step_level)
-        self._finer, self._fine = finer, None
+        self._finer, self._fine = finer, _UNBUILT
         self.allowed = None if allowed is None else set(allowed)
         sh = fitter.sh
         self.fit_tiles, self.val_tiles = sh.tiles.of("fit"), sh.tiles.of("val")
@@ -452,10 +455,10 @@ class Selector:
         k = self.cfg.finer
         if k < 2 or self._finer is None:
             return False, ""
-        if self._fine is None:
+        if self._fine is _UNBUILT:
             self.progress(f"building the simulator at a {k}x finer physics step")
-            self._fine = (self._finer(k),)
-        f2 = self._fine[0]
+            self._fine = self._finer(k)   # None where none can be built
+        f2 = self._fine
         if f2 is None:
             return False, ""
         out = f2.velocities_many([M.z, C.z], [f2.v_hat] * 2, self.val_tiles)
