@@ -454,6 +454,28 @@ def test_a_band_fit_moves_on_from_the_best_width_of_a_scan():
         assert abs(np.log(w / near)) < 0.2, (scan, w)
 
 
+def test_a_judged_model_starts_from_refined_velocities():
+    """``Fitter.refine_iters``: a model is judged from start velocities refined by this many
+    Gauss-Newton steps; where its prediction depends on them nonlinearly one step leaves it far
+    from its best, so a right model could read as worse than it is (``DiagnoseConfig.refine_iters``)."""
+    from sim2real.sysid.fit import Fitter
+
+    sh = types.SimpleNamespace(sys=types.SimpleNamespace(spec=None), v0=np.full((4, 1), 0.8),
+                               sigma_v=np.full((4, 1), 10.0),
+                               predict=lambda zs, vs, tiles: vs[:, tiles],
+                               residuals=lambda p, tiles: p**3 - 1.0)     # best at v = 1
+    f = Fitter(sh, {})
+    f.dv = np.array([1e-5])
+    objective = {}
+    for steps in (1, 3):
+        f.refine_iters = steps
+        v, objective[steps] = f.velocities_many([np.zeros(1)], [f.v_hat], np.arange(4))[0]
+    assert np.all(objective[3] < 0.1 * objective[1])
+    assert DiagnoseConfig(model="m.xml", recordings=("r.csv",)).refine_iters == 3
+    with pytest.raises(ValueError, match="refine_iters"):
+        DiagnoseConfig(model="m.xml", recordings=("r.csv",), refine_iters=0).check()
+
+
 def test_a_backlash_starts_from_compliant_meshes_only():
     """``select.band_starts``: a backlash's fits start from the best point at each width, compliant
     meshes only where the grid has a stiffness (a rigid mesh's fit stays where it starts); without

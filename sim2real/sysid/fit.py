@@ -74,6 +74,8 @@ class Fitter:
         # finite-difference step of the velocities (one per dof, all segments together)
         self.dv = np.maximum(np.median(self.sigma_v, 0), 1e-4 * (np.abs(self.v_hat).max(0) + 1e-3))
         self.nv = shooting.v0.shape[1]
+        self.refine_iters = 1   # Gauss-Newton steps of a judged model's start velocities
+        # (``velocities``; ``DiagnoseConfig.refine_iters`` sets it)
 
     def narrow_velocity_steps(self) -> None:
         """At most 5% of the typical speed as the velocities' finite-difference step: where the
@@ -249,13 +251,15 @@ class Fitter:
         rho = float(np.clip(np.sum(a * b) / denom, 0.0, 0.98)) if denom > 0 else 0.0
         return (1 + rho) / (1 - rho)
 
-    def velocities(self, z, v0, tiles, iters: int = 1):
+    def velocities(self, z, v0, tiles, iters: int | None = None):
         """Refine only the segments' initial velocities (parameters fixed); returns
         ``(v0, per-segment objective [k])`` -- how well ``z`` predicts each segment."""
         return self.velocities_many([z], [v0], tiles, iters)[0]
 
-    def velocities_many(self, zs, v0s, tiles, iters: int = 1):
-        """:meth:`velocities` for several models, their simulations batched together."""
+    def velocities_many(self, zs, v0s, tiles, iters: int | None = None):
+        """:meth:`velocities` for several models, their simulations batched together (``iters``:
+        ``refine_iters`` unless given)."""
+        iters = self.refine_iters if iters is None else iters
         M = len(zs)
         zs = [np.asarray(z, np.float32) for z in zs]
         v0s = [np.asarray(v, float).copy() for v in v0s]
