@@ -143,7 +143,7 @@ class DiagnoseConfig:
     plausible_masses: bool = SelectConfig.plausible_masses
     backlash_starts: int = SelectConfig.backlash_starts
     band_scan: int = SelectConfig.band_scan
-    refine_iters: int = 3
+    refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
     energy_explained: float = 0.5

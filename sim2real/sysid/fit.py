@@ -65,6 +65,10 @@ class Fitter:
         it, step sizes and identifiability measured in its units).
     """
 
+    # Gauss-Newton steps of a judged model's start velocities (``velocities``): one did not
+    # converge for a model whose prediction depends sharply on them (``DiagnoseConfig.refine_iters``)
+    refine_iters: int = 3
+
     def __init__(self, shooting: Shooting, scales: dict[str, float]):
         self.sh = shooting
         self.spec = shooting.sys.spec
@@ -74,8 +78,6 @@ class Fitter:
         # finite-difference step of the velocities (one per dof, all segments together)
         self.dv = np.maximum(np.median(self.sigma_v, 0), 1e-4 * (np.abs(self.v_hat).max(0) + 1e-3))
         self.nv = shooting.v0.shape[1]
-        self.refine_iters = 1   # Gauss-Newton steps of a judged model's start velocities
-        # (``velocities``; ``DiagnoseConfig.refine_iters`` sets it)
 
     def narrow_velocity_steps(self) -> None:
         """At most 5% of the typical speed as the velocities' finite-difference step: where the
