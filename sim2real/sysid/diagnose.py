@@ -82,8 +82,8 @@ class DiagnoseConfig:
         body mass within ``FAR_MASS`` of the model's is preferred (``SelectConfig``).
       backlash_starts: a backlash is fitted from this many widths of its grid, the best kept
         (``SelectConfig``).
-      band_scan: then this many widths over its range are simulated together, and the fit started
-        again from one that fits better (0: off; ``SelectConfig``).
+      band_scan: after a backlash's fits, this many widths over its range are simulated together
+        and the fit is started again from one that fits better (0: off; ``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
