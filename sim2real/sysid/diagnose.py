@@ -168,15 +168,11 @@ class DiagnoseConfig:
             raise ValueError(f"val_fraction={self.val_fraction}: must be between 0.05 and 0.6")
         if self.coulomb_eps <= 0:
             raise ValueError("coulomb_eps must be > 0")
-        if self.backlash_starts < 1:
-            raise ValueError(f"backlash_starts={self.backlash_starts}: must be >= 1")
         if self.finer < 0:
             raise ValueError(f"finer={self.finer}: must be >= 0 (0: off)")
-        if self.refine_iters < 1:
-            raise ValueError(f"refine_iters={self.refine_iters}: must be >= 1")
         if self.band_scan == 1 or self.band_scan < 0:
             raise ValueError(f"band_scan={self.band_scan}: must be 0 (off) or >= 2 widths")
-        for key in ("num_windows", "top", "max_effects"):
+        for key in ("num_windows", "top", "max_effects", "backlash_starts", "refine_iters"):
             if getattr(self, key) < 1:
                 raise ValueError(f"{key}={getattr(self, key)}: must be >= 1")
         unknown = set(self.effects) - set(ALL_EFFECTS)
@@ -491,8 +487,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                 "the recordings are too short for the horizon the data chose")
         spec = system.spec
         scales = {n: max(abs(float(spec[n].default)), 1e-6) for n in system.nominal}
-        fitter = Fitter(sh, scales)
-        fitter.refine_iters = cfg.refine_iters
+        fitter = Fitter(sh, scales, refine_iters=cfg.refine_iters)
         # the step's error grows along a prediction: measured over the segments' own length (at
         # least 0.3 s), or a long horizon's floor is too low for what the step does to it
         floor_seconds, at = max(0.3, H * dt), None
@@ -519,8 +514,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             fine = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay,
                           substeps=system.substeps * k)
             sh_f = Shooting(fine, trajs, H, heldout=heldout_idx, val_fraction=cfg.val_fraction)
-            f_fine = Fitter(sh_f, fitter.scales)
-            f_fine.refine_iters = cfg.refine_iters
+            f_fine = Fitter(sh_f, fitter.scales, refine_iters=fitter.refine_iters)
             if rough_any:  # the same segments: their refined start velocities
                 f_fine.v_hat, f_fine.dv = fitter.v_hat.copy(), fitter.dv
             return f_fine

@@ -63,14 +63,17 @@ class Fitter:
       shooting: the batched simulator.
       scales: ``{name: typical magnitude}`` of every parameter that may be fitted (FD step 1% of
         it, step sizes and identifiability measured in its units).
+      refine_iters: the class's default (below) unless given.
     """
 
     # Gauss-Newton steps of a judged model's start velocities (``velocities``): one did not
     # converge for a model whose prediction depends sharply on them (``DiagnoseConfig.refine_iters``)
     refine_iters: int = 3
 
-    def __init__(self, shooting: Shooting, scales: dict[str, float]):
+    def __init__(self, shooting: Shooting, scales: dict[str, float], refine_iters: int | None = None):
         self.sh = shooting
+        if refine_iters is not None:
+            self.refine_iters = refine_iters
         self.spec = shooting.sys.spec
         self.scales = scales
         self.v_hat = shooting.v0.copy()
