@@ -111,7 +111,9 @@ class Settings:
     loop_warm_start: the loop fine-tunes the recorded policy (``oracle_ft`` is its fair
     comparison); loop_fallback: a loop iteration whose diagnosis is unusable (inconclusive, or
     masses re-fitted > 10x off) trains on the ``wide`` box instead (``loop.unusable``; false: on
-    the diagnosis anyway, as before 2026-11-27's twelfth session); config_set: extra training settings for every method, ``key=value`` separated by
+    the diagnosis anyway, as before 2026-11-27's twelfth session); loop_deterministic: the loop
+    records the policy's mean action (false: actions sampled from the policy, more excitation);
+    config_set: extra training settings for every method, ``key=value`` separated by
     ``;`` (e.g. ``ppo.num_envs=1024;ppo.num_minibatches=16``)."""
     env: str = "pendulum"
     seeds: int = 3
@@ -125,6 +127,7 @@ class Settings:
     device: str = "2 CPU cores"
     loop_warm_start: bool = False
     loop_fallback: bool = True
+    loop_deterministic: bool = True
     config_set: str = ""
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
@@ -243,7 +246,8 @@ def main(args: Settings):
             b = dataclasses.replace(base, seed=s)
             try:
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
-                                     run_seed=s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback)
+                                     run_seed=s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
+                                     deterministic=args.loop_deterministic)
             except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
                 _not_run("diag_dr_1", s, f"the diagnosis refused the nominal policy's recordings ({e})")
                 continue
@@ -256,7 +260,8 @@ def main(args: Settings):
             if "diag_dr_2" in methods:
                 try:
                     it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
-                                         seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback)
+                                         seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
+                                         deterministic=args.loop_deterministic)
                 except RecordingError as e:
                     _not_run("diag_dr_2", s, f"the diagnosis refused the first loop's recordings ({e})")
                     continue
