@@ -767,17 +767,17 @@ def test_an_effect_that_helped_but_was_not_named_is_reported_as_not_confirmed():
         model = types.SimpleNamespace(effects=list(on) + [c], val=np.ones(8), result=res(phi), z=np.array([0.0094, 0.02, 0.3]))
         return types.SimpleNamespace(candidate=c, model=model, passed=passed, val_ratio=ratio, t=t, note="")
 
-    cfg = DiagnoseConfig()
-    sel = types.SimpleNamespace(rounds=[[trial(sat, 0.568, 1.48), trial(lag, 1.3, -1.0), trial(fr, 0.5, 1.0, on=[lag])]])
-    out = _unconfirmed(cfg, sel, 0, none, spec)
+    sel, _ = _selector({})
+    sel.rounds = [[trial(sat, 0.568, 1.48), trial(lag, 1.3, -1.0), trial(fr, 0.5, 1.0, on=[lag])]]
+    out = _unconfirmed(sel, 0, none, spec)
     assert [r["effect"] for r in out] == ["actuator_saturation"]
     assert out[0]["params"] == {"actuator_saturation:m": pytest.approx(0.0094)} and out[0]["segments"] == 8
     assert "not consistently over the 8 validation segments (t = 1.48, 2 asked)" in out[0]["why"]
     # passing the t-test but stopped by the floors (no evidence there), or fitting the training
     # segments worse: not listed
     sel.rounds = [[trial(sat, 0.5, 3.0), trial(lag, 0.5, 1.0, phi=120.0)]]
-    assert _unconfirmed(cfg, sel, 0, none, spec) == []
+    assert _unconfirmed(sel, 0, none, spec) == []
     # a named one, or no round on top of the answer: nothing
     sel.rounds = [[trial(sat, 0.5, 3.0, passed=True)]]
-    assert _unconfirmed(cfg, sel, 0, none, spec) == []
-    assert _unconfirmed(cfg, sel, 1, none, spec) == []
+    assert _unconfirmed(sel, 0, none, spec) == []
+    assert _unconfirmed(sel, 1, none, spec) == []

@@ -803,7 +803,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
             + f" predicts the validation segments within {100 * cfg.tie_tolerance:g}% of the selected effect or better; "
             "the selected one predicts all the training data best; "
             "recordings with faster or richer commands would tell them apart")
-    unconfirmed = _unconfirmed(cfg, sel, keep, chosen, spec)
+    unconfirmed = _unconfirmed(sel, keep, chosen, spec)
     for r in unconfirmed:
         notes.append(f"not confirmed: `{r['effect']}`" + (f" at {r['target']}" if r["target"] else "")
                      + f" ({', '.join(f'{n} = {v:.4g}' for n, v in r['params'].items())}): its validation error is "
@@ -889,7 +889,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     return d
 
 
-def _unconfirmed(cfg, sel, keep, chosen, spec) -> list[dict]:
+def _unconfirmed(sel, keep, chosen, spec) -> list[dict]:
     """Candidates fitted on top of the answer that lowered the validation error by the gain the
     selection asks for and fitted the training segments better, but failed the t-test: the answer
     stands, and the report says so rather than that nothing predicts better (the extra list's
@@ -899,7 +899,7 @@ def _unconfirmed(cfg, sel, keep, chosen, spec) -> list[dict]:
     ratio of two such errors is no evidence."""
     if keep >= len(sel.rounds):
         return []
-    gain = cfg.min_gain if chosen.effects else cfg.min_gain_first
+    gain, min_t = sel.gain_asked(not chosen.effects), sel.cfg.min_t
     mine = sorted(c.label for c in chosen.effects)
     out = []
     for tr in sel.rounds[keep]:
@@ -907,10 +907,10 @@ def _unconfirmed(cfg, sel, keep, chosen, spec) -> list[dict]:
             continue
         if sorted(c.label for c in tr.model.effects if c.label != tr.candidate.label) != mine:
             continue  # fitted on top of another model (the answer was pruned or extended since)
-        if not (tr.t < cfg.min_t and tr.model.result.phi < chosen.result.phi):
+        if not (tr.t < min_t and tr.model.result.phi < chosen.result.phi):
             continue
         n = len(tr.model.val)
-        why = f"not consistently over the {n} validation segments (t = {tr.t:.2f}, {cfg.min_t:g} asked)"
+        why = f"not consistently over the {n} validation segments (t = {tr.t:.2f}, {min_t:g} asked)"
         out.append({"effect": tr.candidate.effect, "target": tr.candidate.target, "base": chosen.label,
                     "params": {p: float(tr.model.z[spec.index(p)]) for p in tr.candidate.params},
                     "validation_ratio": float(tr.val_ratio), "t": float(tr.t), "segments": n, "why": why})

@@ -300,14 +300,16 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
     ``**bold**`` and ``code`` spans."""
     fit = d["fit"]
     B = [("h1", f"Diagnosis of `{os.path.basename(d['model'])}`")]
+
+    def named(rows):  # "`effect` at `target`, ..."
+        return ", ".join(f"`{r['effect']}`" + (f" at `{r['target']}`" if r["target"] else "") for r in rows)
+
     if d["answer"] == "effects":
-        B.append(("p", "**Missing physics found:** " + ", ".join(
-            f"`{s['effect']}`" + (f" at `{s['target']}`" if s["target"] else "") for s in d["selected"]) + "."))
+        B.append(("p", "**Missing physics found:** " + named(d["selected"]) + "."))
     elif d["answer"] == "none" and d.get("unconfirmed"):
-        B.append(("p", "**No missing effect confirmed**: " + ", ".join(
-            f"`{r['effect']}`" + (f" at `{r['target']}`" if r["target"] else "") for r in d["unconfirmed"])
-            + " predicted the validation segments better than the nominal model (re-fitted parameters below), "
-              "but not clearly enough to be named (notes)."))
+        B.append(("p", "**No missing effect confirmed**: " + named(d["unconfirmed"])
+                  + " predicted the validation segments better than the nominal model (re-fitted parameters "
+                    "below), but not clearly enough to be named (notes)."))
     elif d["answer"] == "none":
         B.append(("p", "**No missing effect found**: the nominal model (re-fitted parameters below) predicts the data "
                        "as well as any candidate."))

@@ -401,8 +401,12 @@ class Selector:
         """The test of a model against the one it extends (``first``: that one has no effect);
         ``step_level``: the physics step's floor (default: the diagnosis' own step's)."""
         c = self.cfg
-        gain = c.min_gain_first if first else c.min_gain
-        return ratio <= 1 - gain and t >= c.min_t and (level > self._floor(step_level) or ratio <= c.strong)
+        return ratio <= 1 - self.gain_asked(first) and t >= c.min_t and (level > self._floor(step_level) or ratio <= c.strong)
+
+    def gain_asked(self, first: bool) -> float:
+        """The relative drop of the validation error an effect must bring: ``min_gain_first`` on a
+        model with no effect, ``min_gain`` on one with effects."""
+        return self.cfg.min_gain_first if first else self.cfg.min_gain
 
     def _floor(self, step_level=None) -> float:
         """The misfit a model must exceed for an effect on it to be trusted (``floor_level``,
