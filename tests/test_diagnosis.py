@@ -752,31 +752,41 @@ def test_the_work_balance_sizes_a_friction_past_a_torque_glitch(tmp_path):
 
 def test_an_effect_that_helped_but_was_not_named_is_reported_as_not_confirmed():
     """The answer stands, but a `none` does not claim that nothing predicts better: a candidate
-    fitted on top of the answer that lowered the validation error by the asked gain and failed the
-    t-test alone is listed with why; a worse one, or one fitted on another model, is not."""
+    fitted on top of the answer that failed the t-test alone (``Selector.failed_t_alone``) is
+    listed with why; a worse one, one on a model already within the floors (no evidence there),
+    or one fitted on another model, is not."""
     from sim2real.sysid.candidates import Candidate
     from sim2real.sysid.diagnose import _unconfirmed
+    from sim2real.sysid.fit import Result
+    from sim2real.sysid.select import Model, Trial
 
     sat, lag, fr = (Candidate(e, "m", (f"{e}:m",), ((0.1,),), (1.0,), ((0.0, 1.0),))
                     for e in ("actuator_saturation", "motor_lag", "coulomb_friction"))
     spec = types.SimpleNamespace(index={"actuator_saturation:m": 0, "motor_lag:m": 1, "coulomb_friction:m": 2}.get)
-    res = lambda phi: types.SimpleNamespace(phi=phi)  # noqa: E731
-    none = types.SimpleNamespace(effects=[], label="none", result=res(100.0))
+
+    def model(effects, phi, val=1.0, sse=None):
+        z = np.array([0.0094, 0.02, 0.3])
+        res = Result(z, np.zeros((1, 1)), [], {}, phi, phi if sse is None else sse, 1000, [], 1)
+        return Model(list(effects), res, np.full(8, val), [])
+
+    none = model([], 100.0, val=5.0)   # misfits by 0.4 per residual: above the floor
 
     def trial(c, ratio, t, phi=50.0, on=(), passed=False):
-        model = types.SimpleNamespace(effects=list(on) + [c], val=np.ones(8), result=res(phi), z=np.array([0.0094, 0.02, 0.3]))
-        return types.SimpleNamespace(candidate=c, model=model, passed=passed, val_ratio=ratio, t=t, note="")
+        return Trial(c, 0.1, model(list(on) + [c], phi), ratio, t, passed)
 
     sel, _ = _selector({})
+    sel.spec = types.SimpleNamespace(index=lambda name: 0)
     sel.rounds = [[trial(sat, 0.568, 1.48), trial(lag, 1.3, -1.0), trial(fr, 0.5, 1.0, on=[lag])]]
     out = _unconfirmed(sel, 0, none, spec)
     assert [r["effect"] for r in out] == ["actuator_saturation"]
     assert out[0]["params"] == {"actuator_saturation:m": pytest.approx(0.0094)} and out[0]["segments"] == 8
     assert "not consistently over the 8 validation segments (t = 1.48, 2 asked)" in out[0]["why"]
-    # passing the t-test but stopped by the floors (no evidence there), or fitting the training
-    # segments worse: not listed
+    # passing the t-test, fitting the training segments worse, or on a model already predicting
+    # within the floors (no evidence there): not listed
     sel.rounds = [[trial(sat, 0.5, 3.0), trial(lag, 0.5, 1.0, phi=120.0)]]
     assert _unconfirmed(sel, 0, none, spec) == []
+    sel.rounds = [[trial(sat, 0.568, 1.48)]]
+    assert _unconfirmed(sel, 0, model([], 100.0, val=0.001, sse=1.0), spec) == []
     # a named one, or no round on top of the answer: nothing
     sel.rounds = [[trial(sat, 0.5, 3.0, passed=True)]]
     assert _unconfirmed(sel, 0, none, spec) == []

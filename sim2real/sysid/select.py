@@ -93,6 +93,7 @@ class Trial:
     base_level: float = float("nan")
     note: str = ""
     others: list = dataclasses.field(default_factory=list)  # more starts: [(start, (z, v) base)] at other widths
+    finer: bool = False     # judged at the finer step too (``Selector._finer_passes``)
 
 
 @dataclasses.dataclass
@@ -431,6 +432,19 @@ class Selector:
             return ok, ratio, t, note
         return False, ratio, t, ""
 
+    def failed_t_alone(self, M: Model, tr: Trial) -> bool:
+        """``tr``, fitted on top of ``M``, failed the t-test and nothing else: it lowered the
+        validation error by the gain asked, on a model that misfits by more than the floors (at
+        its own step: one judged at the finer step is not), fitted the training segments better,
+        and away from its absent value. One stopped by the floors is not: there ``M`` already
+        predicts within the precision of the data and of the physics step, and a ratio of two
+        such errors is no evidence. (The report lists such candidates as unconfirmed,
+        ``diagnose._unconfirmed``.)"""
+        C = tr.model
+        return (C is not None and not tr.passed and not tr.finer and np.isfinite(tr.t) and tr.t < self.cfg.min_t
+                and not self._absent(tr.candidate, C) and C.result.phi < M.result.phi
+                and self._passes(tr.val_ratio, np.inf, self.level(M), not M.effects))
+
     def _within_one_step(self, M: Model, C: Model) -> str:
         """Why ``C`` is judged against ``M`` at the ``finer`` step too, whatever the floors say (""
         if not): an effect ``C`` adds is a delay or a lag shorter than one physics step. An
@@ -530,6 +544,7 @@ class Selector:
         for t in trials:
             t.passed, t.val_ratio, t.t, note = self._accept(M, t.model, not M.effects)
             t.base_level = level
+            t.finer = bool(note)
             if note:
                 t.note = (t.note + "; " if t.note else "") + note
 
