@@ -113,7 +113,9 @@ class Settings:
     masses re-fitted > 10x off) trains on the ``wide`` box instead (``loop.unusable``; false: on
     the diagnosis anyway, as before 2026-11-27's twelfth session); loop_deterministic: the loop
     records the policy's mean action (false: actions sampled from the policy, more excitation);
-    config_set: extra training settings for every method, ``key=value`` separated by
+    record_until_end: the real budget's episodes (SimOpt's and the loop's) are logged on to their
+    full length after the env would end them (a hopper's fall; ``record.native``), returns still
+    counted to the fall; config_set: extra training settings for every method, ``key=value`` separated by
     ``;`` (e.g. ``ppo.num_envs=1024;ppo.num_minibatches=16``)."""
     env: str = "pendulum"
     seeds: int = 3
@@ -128,6 +130,7 @@ class Settings:
     loop_warm_start: bool = False
     loop_fallback: bool = True
     loop_deterministic: bool = True
+    record_until_end: bool = False
     config_set: str = ""
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
@@ -208,7 +211,7 @@ def main(args: Settings):
     env_dt = make(base.env, **dict(base.env_options)).dt
     ctrl_rate = {}
     for s in per_seed:
-        rolls, what = from_run(nominal, plant, 3, seed=100 + s, run_seed=s, noise=1e-3)
+        rolls, what = from_run(nominal, plant, 3, seed=100 + s, run_seed=s, noise=1e-3, until_end=args.record_until_end)
         save(rolls, what, os.path.join(work, f"rec_nominal_{s}"))
         k = int(round(env_dt / rolls.dt))
         if k < 1 or abs(k * rolls.dt - env_dt) > 1e-6 * env_dt:
@@ -247,7 +250,7 @@ def main(args: Settings):
             try:
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
                                      run_seed=s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
-                                     deterministic=args.loop_deterministic)
+                                     deterministic=args.loop_deterministic, until_end=args.record_until_end)
             except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
                 _not_run("diag_dr_1", s, f"the diagnosis refused the nominal policy's recordings ({e})")
                 continue
@@ -261,7 +264,7 @@ def main(args: Settings):
                 try:
                     it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
                                          seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
-                                         deterministic=args.loop_deterministic)
+                                         deterministic=args.loop_deterministic, until_end=args.record_until_end)
                 except RecordingError as e:
                     _not_run("diag_dr_2", s, f"the diagnosis refused the first loop's recordings ({e})")
                     continue

@@ -77,6 +77,42 @@ def test_native_plant_matches_the_env_on_the_envs_own_model():
     assert b.dt == pytest.approx(env.dt) and b.qpos.shape == (2, 11, 1)
 
 
+def _full_torque_policy(env):
+    def act(obs, carry, first, key):
+        return np.ones((obs.shape[0], env.action_size), np.float32), carry
+
+    act.carry_size = 0
+    return act
+
+
+def test_a_fall_ends_the_log_unless_recorded_until_the_end():
+    """A hopper under full torque falls (the env terminates it); ``until_end`` logs on to the
+    episode's length, the same samples up to the fall, the same return (counted to the fall)."""
+    env = make("hopper", episode_length=60)
+    act = _full_torque_policy(env)
+    a = native(env, env_model_path(env), act, 2, jax.random.PRNGKey(0))
+    b = native(env, env_model_path(env), act, 2, jax.random.PRNGKey(0), until_end=True)
+    full = 60 * 4 + 1  # 4 physics steps of 2 ms per control step, and the initial state
+    assert np.all(a.length < full) and np.all(b.length == full)
+    np.testing.assert_array_equal(a.ret, b.ret)
+    for e in range(2):
+        n = int(a.length[e])
+        np.testing.assert_array_equal(a.qpos[e, :n], b.qpos[e, :n])
+        assert np.ptp(b.qpos[e, n:, 2]) > 0.05  # it went on moving after the fall (torso angle, rad)
+
+
+@pytest.mark.slow  # compiles the hopper's MJX rollout twice (80 s on 2 cores)
+def test_a_fall_in_the_env_is_logged_until_the_end_when_asked():
+    env = make("hopper", episode_length=60)
+    act = _full_torque_policy(env)
+    a = simulated(env, env.default_z(), act, 2, jax.random.PRNGKey(0))
+    b = simulated(env, env.default_z(), act, 2, jax.random.PRNGKey(0), until_end=True)
+    assert np.all(a.length < 61) and np.all(b.length == 61)
+    np.testing.assert_allclose(a.ret, b.ret, rtol=1e-5)  # two compiled programs: float32 rounding
+    n = int(a.length[0])
+    np.testing.assert_allclose(a.qpos[0, :n], b.qpos[0, :n], atol=1e-5)
+
+
 def test_recordings_round_trip_into_the_diagnosis_reader(tmp_path):
     env = make("pendulum", episode_length=10)
     r = native(env, PLANT, _zero_policy(env), 2, jax.random.PRNGKey(1), noise=1e-3)

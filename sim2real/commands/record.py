@@ -7,7 +7,8 @@ diagnosis' ``fitted.xml``), logged at every physics step; ``name=value,...``: th
 those physics values (MJX), logged per control step; empty: the run's own physics.
 ``run_seed``: which of the run's seeds acts; ``seed``: initial states and noise; ``noise``: std of
 the position sensor's noise on an MJCF target (m or rad); ``deterministic=false`` samples actions
-(more excitation for identification). Writes ``DIR/episode_000.csv``... and ``DIR/record.json``
+(more excitation for identification); ``until_end=true`` logs an episode the env would end (a
+fall) on to its full length. Writes ``DIR/episode_000.csv``... and ``DIR/record.json``
 (what was rolled, the returns).
 """
 import os
@@ -35,7 +36,7 @@ def main(argv):
 
     try:
         rolls, what = from_run(a.run, a.target, a.episodes, a.seed, a.run_seed, a.noise,
-                               a.deterministic, progress=advance)
+                               a.deterministic, progress=advance, until_end=a.until_end)
     finally:
         for b in bars:
             b.close()

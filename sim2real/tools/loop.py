@@ -45,6 +45,8 @@ class LoopConfig:
       seed: initial states of the recordings; noise: the target's position-sensor noise (m or rad).
       eval_episodes: episodes on the target that score each policy at the end (>= 1).
       deterministic: record the policy's mean action; overwrite: replace an earlier loop folder;
+      until_end: record an episode the env would end (a fall) on to its full length
+        (``record.native``): a policy that falls at once still records seconds of the plant;
       progress: progress bars.
       warm_start: each retraining starts from the policy that made its recordings (its parameters
         and observation statistics; a fresh optimiser) instead of from scratch, as a researcher
@@ -64,6 +66,7 @@ class LoopConfig:
     noise: float = 0.0
     eval_episodes: int = 64
     deterministic: bool = True
+    until_end: bool = False
     overwrite: bool = False
     progress: bool = True
     warm_start: bool = False
@@ -99,13 +102,14 @@ def unusable(d: dict) -> str | None:
 
 def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: int = 3, seed: int = 0,
               run_seed: int = 0, noise: float = 0.0, deterministic: bool = True, diagnose_options=(),
-              progress: bool = False, warm_start: bool = False, fallback: DRConfig | None = None) -> dict:
+              progress: bool = False, warm_start: bool = False, fallback: DRConfig | None = None,
+              until_end: bool = False) -> dict:
     """One loop iteration from the policy of ``run_dir`` (seed ``run_seed``); returns what it did
     (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded
     episodes, ``trained_on``: ``diagnosis`` or ``fallback``, and ``why`` the diagnosis was not
     used). ``warm_start``: the retraining starts from that policy (seed ``run_seed`` for a one-seed
     ``base``, else each seed from its own). ``fallback``: the randomisation to train on when the
-    diagnosis is ``unusable`` (``LoopConfig.fallback``)."""
+    diagnosis is ``unusable`` (``LoopConfig.fallback``); ``until_end``: ``LoopConfig.until_end``."""
     import warnings
 
     from sim2real.common import config as config_lib
@@ -117,7 +121,7 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
 
     if episodes < 2:
         raise config_lib.ConfigError(f"episodes={episodes}: the loop needs >= 2 (the last one is held out)")
-    rolls, what = from_run(run_dir, target, episodes, seed, run_seed, noise, deterministic)
+    rolls, what = from_run(run_dir, target, episodes, seed, run_seed, noise, deterministic, until_end=until_end)
     paths = save(rolls, what, os.path.join(out, "recordings"))
     model = env_model_path(env_class(base.env))
     # only effects the training env can express: its physics names them as ``kind:target`` (the

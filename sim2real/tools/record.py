@@ -38,8 +38,10 @@ class Rollouts:
       qpos: ``[E, T, nq]`` measured joint positions (m or rad), env joint order.
       qvel: ``[E, T, nv]`` joint velocities (m/s or rad/s).
       ctrl: ``[E, T, nu]`` commands (actuator ctrl units); ``ctrl[:, k]`` acts from sample k to k+1.
-      length: ``[E]`` valid samples of each episode (an episode that terminates stops early).
-      ret: ``[E]`` episode returns (the env's reward summed over control steps).
+      length: ``[E]`` valid samples of each episode (an episode that terminates stops early,
+        unless recorded ``until_end``).
+      ret: ``[E]`` episode returns (the env's reward summed over control steps, up to the
+        termination).
       joints, actuators: names (column order).
     """
 
@@ -95,13 +97,16 @@ def policy(env: Env, ppo, params, obs_stats, z_ctx, deterministic: bool = True):
     return act
 
 
-def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0, progress=None) -> Rollouts:
+def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0, progress=None,
+           until_end: bool = False) -> Rollouts:
     """Episodes of ``act`` on the MJCF ``xml_path`` stepped by native MuJoCo.
 
     The plant's joints and actuators are matched to the env's by name (it may have more bodies,
     other masses, friction, delays, ...); its timestep must divide the env's control step.
     ``noise``: std of white noise on the measured positions (m or rad), seen by the policy and
-    logged. Initial states are the env's (``env.init_qpos_qvel``).
+    logged. Initial states are the env's (``env.init_qpos_qvel``). ``until_end``: an episode the
+    env terminates (a hopper that falls) is stepped and logged on to the episode's length; its
+    return still stops at the termination. A numerically diverged plant stops its log either way.
     """
     if not os.path.exists(xml_path):
         raise FileNotFoundError(f"target '{xml_path}' not found")
@@ -143,7 +148,8 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
     ctrl = np.zeros((episodes, n_s, len(acts)))
     length = np.full(episodes, n_s)
     ret = np.zeros(episodes)
-    alive = np.ones(episodes, bool)
+    alive = np.ones(episodes, bool)  # the return counts while the env would not have terminated
+    logging = np.ones(episodes, bool)  # stepped and logged (past the termination with ``until_end``)
     observe = jax.jit(jax.vmap(env.observe))
     data0 = env._data0
 
@@ -174,7 +180,7 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
         u = np.asarray(u, np.float64)
         first = jnp.zeros(episodes, bool)
         q_before, v_before = state()
-        live = np.nonzero(alive)[0]
+        live = np.nonzero(logging)[0]
         for e in live:
             datas[e].ctrl[aid] = u[e]
         for s in range(sub):  # the command is held over the control step; every physics step logged
@@ -187,20 +193,22 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
         r, term = task(*(jnp.asarray(x, jnp.float32) for x in (q_before, v_before, q_after, v_after, u)), goal)
         r, term = np.asarray(r), np.asarray(term) | ~ok
         ret += np.where(alive, np.where(ok, r, 0.0), 0.0)
-        ended = alive & term
-        length[ended] = (t + 1) * sub + 1
+        stop = logging & (~ok if until_end else term)
+        length[stop] = (t + 1) * sub + 1
         alive &= ~term
+        logging &= ~stop
         if progress is not None:
             progress(t + 1, T)
-        if not alive.any():
+        if not logging.any():
             break
     ctrl[:, -1] = ctrl[:, -2]
     return Rollouts(float(m.opt.timestep), qpos, qvel, ctrl, length, ret, joints, acts)
 
 
-def simulated(env: Env, z, act, episodes: int, key) -> Rollouts:
+def simulated(env: Env, z, act, episodes: int, key, until_end: bool = False) -> Rollouts:
     """Episodes of ``act`` on the env itself with physics ``z [P]`` (MJX), logged per control step;
-    positions as the env's sensors give them (``sensor_offset``/``sensor_noise`` effects)."""
+    positions as the env's sensors give them (``sensor_offset``/``sensor_noise`` effects).
+    ``until_end``: as in :func:`native`."""
     z = jnp.asarray(env.spec.validate(z, where=f"target physics for env '{env.name}'"))
     T = env.config.episode_length
     k_reset, k_run = jax.random.split(key)
@@ -215,8 +223,9 @@ def simulated(env: Env, z, act, episodes: int, key) -> Rollouts:
             u, carry = act(s.obs, carry, first, k_act)
             s2 = jax.vmap(env.step, in_axes=(0, 0, None))(s, u, z)
             ret = ret + jnp.where(alive, s2.reward, 0.0)
-            n = n + alive
-            s = jax.tree_util.tree_map(lambda a, b: jnp.where(alive.reshape((-1,) + (1,) * (a.ndim - 1)), a, b), s2, s)
+            logging = jnp.ones_like(alive) if until_end else alive
+            n = n + logging
+            s = jax.tree_util.tree_map(lambda a, b: jnp.where(logging.reshape((-1,) + (1,) * (a.ndim - 1)), a, b), s2, s)
             alive = alive & ~s2.terminated
             q = sense(s.data.qpos, jax.random.split(k_sense, episodes))
             return (s, carry, alive, jnp.zeros_like(first), ret, n), (q, s.data.qvel, u)
@@ -283,6 +292,8 @@ class RecordConfig:
       seed: initial states and noise; run_seed: which of the run's seeds acts.
       noise: std of the position sensor's noise on an MJCF target (m or rad, >= 0).
       deterministic: the policy's mean action (``false``: sampled, more excitation).
+      until_end: step and log an episode the env terminates (a fall) on to its full length, as a
+        lab's logger keeps running after a robot falls (the return still stops at the fall).
       overwrite: replace an earlier recordings folder (only one sim2real made).
       progress: a progress bar.
     """
@@ -294,6 +305,7 @@ class RecordConfig:
     run_seed: int = 0
     noise: float = 0.0
     deterministic: bool = True
+    until_end: bool = False
     overwrite: bool = False
     progress: bool = True
 
@@ -309,8 +321,9 @@ class RecordConfig:
 
 
 def from_run(run_dir: str, target: str, episodes: int, seed: int = 0, run_seed: int = 0, noise: float = 0.0,
-             deterministic: bool = True, progress=None) -> tuple[Rollouts, dict]:
-    """Episodes of seed ``run_seed``'s policy of a run on ``target`` (see :func:`parse_target`).
+             deterministic: bool = True, progress=None, until_end: bool = False) -> tuple[Rollouts, dict]:
+    """Episodes of seed ``run_seed``'s policy of a run on ``target`` (see :func:`parse_target`;
+    ``until_end``: see :func:`native`).
 
     Returns the rollouts and a description of what was rolled (for ``record.json``).
     """
@@ -325,7 +338,7 @@ def from_run(run_dir: str, target: str, episodes: int, seed: int = 0, run_seed: 
     key = jax.random.PRNGKey(seed)
     xml, values = parse_target(target)
     if xml:
-        r = native(env, xml, act, episodes, key, noise, progress)
+        r = native(env, xml, act, episodes, key, noise, progress, until_end)
         what = {"target": os.path.abspath(xml), "simulator": f"native MuJoCo {mujoco.__version__} (mj_step)"}
     else:
         if noise:
@@ -333,10 +346,10 @@ def from_run(run_dir: str, target: str, episodes: int, seed: int = 0, run_seed: 
         z = base.copy()
         for n, v in values.items():
             z[env.spec.index(n)] = v
-        r = simulated(env, z, act, episodes, key)
+        r = simulated(env, z, act, episodes, key, until_end)
         what = {"target": {n: float(z[env.spec.index(n)]) for n in values} or "the run's physics",
                 "simulator": "the run's env (MJX)"}
     what.update(run=os.path.abspath(run_dir), env=cfg.env, run_seed=run_seed, seed=seed, episodes=episodes,
-                deterministic=deterministic, noise=noise, sample_period=r.dt,
+                deterministic=deterministic, until_end=until_end, noise=noise, sample_period=r.dt,
                 returns=[round(float(x), 4) for x in r.ret], mean_return=float(np.mean(r.ret)))
     return r, what
