@@ -11,6 +11,7 @@ import copy
 import jax
 import mujoco
 import numpy as np
+import pytest
 
 from conftest import env_for, run_rows, smooth_actions
 
@@ -32,6 +33,7 @@ def native(env, qpos0, qvel0, actions, dt, frame_skip, iterations, ls_iterations
     return np.array(out)
 
 
+@pytest.mark.optimized  # runs long (see conftest.py)
 def test_tuned_hopper_close_to_default_mujoco():
     env = env_for("hopper")
     acts = smooth_actions(env, 40)

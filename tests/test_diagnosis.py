@@ -15,6 +15,9 @@ from sim2real.sysid import select
 from sim2real.sysid.diagnose import DiagnoseConfig, diagnose, far_masses, relative_change
 from sim2real.sysid.trajectory import choose_window, noise_std
 
+# every test here runs a diagnosis: thousands of simulated segments (see conftest.py)
+pytestmark = pytest.mark.optimized
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 _spec = importlib.util.spec_from_file_location("sysid_cases", os.path.join(ROOT, "benchmarks", "sysid_cases.py"))
 cases = importlib.util.module_from_spec(_spec)

@@ -106,6 +106,7 @@ def test_drag_matches_mujocos_own_quadratic_damping(tmp_path):
     assert np.abs(np.array(nodrag) - native).max() > 0.1 * top
 
 
+@pytest.mark.optimized  # runs long (see conftest.py)
 def test_diagnosis_names_quadratic_drag_when_asked(tmp_path):
     c = 3e-3  # N m s^2/rad^2: 0.1-0.3 N m at the swings' top speeds, against 0.5 N m commands
     truth = _xml(tmp_path, "truth.xml", d1=c)

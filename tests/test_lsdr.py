@@ -51,6 +51,7 @@ def test_alpha_keeps_entropy_alpha_zero_collapses(dist, alpha):
         assert np.mean(z) < 2.1 - 0.3
 
 
+@pytest.mark.optimized  # runs long (see conftest.py)
 def test_lsdr_moves_probability_to_the_solvable_masses(tmp_path):
     """A 2 Nm motor balances a light pole but not a heavy one: p_phi must shift to light masses.
 

@@ -200,6 +200,7 @@ def test_parameter_only_mismatch_names_no_effect(tmp_path):
 # --------------------------------------------------------------------------------------------
 # real hardware: the bundled EMPS data (the demo)
 
+@pytest.mark.optimized  # runs long (see conftest.py)
 def test_emps_hardware_diagnosis(tmp_path):
     out = tmp_path / "emps"
     d = diagnose(DiagnoseConfig(model=emps.NOMINAL_XML, recordings=(emps.RECORDINGS["estimation"],),

@@ -86,6 +86,7 @@ def test_torque_offset_matches_mujocos_applied_force():
     assert np.abs(ours(spec.default) - native).max() > 0.1 * np.ptp(native)  # and it matters
 
 
+@pytest.mark.optimized  # runs long (see conftest.py)
 def test_diagnosis_names_a_torque_offset_when_asked(tmp_path):
     m = mujoco.MjModel.from_xml_string(ARM)
     model = tmp_path / "arm.xml"

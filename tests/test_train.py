@@ -61,6 +61,7 @@ def test_recurrent_and_context_policies_train_over_seeds(tmp_path, extra):
         assert p.shape[0] == 2 and not np.allclose(p[0], p[1])
 
 
+@pytest.mark.optimized  # runs long (see conftest.py)
 def test_ppo_learns_pendulum_swing_up_in_every_seed(tmp_path):
     """From about -1200 (random) to a swing-up-and-hold policy in *each* of 3 vmapped seeds, with the
     config's 1.5M steps per seed on CPU: a PPO whose mean is good but one seed stuck fails here.
