@@ -44,9 +44,10 @@ def _script(name):
     return mod
 
 
-def _zero_policy(env):
+def _constant_policy(env, u: float = 0.0):
+    """Every env gets the command ``u`` (ctrl units) at every step."""
     def act(obs, carry, first, key):
-        return np.zeros((obs.shape[0], env.action_size), np.float32), carry
+        return np.full((obs.shape[0], env.action_size), u, np.float32), carry
 
     act.carry_size = 0
     return act
@@ -56,7 +57,7 @@ def test_native_plant_matches_the_env_on_the_envs_own_model():
     """The env's MJCF stepped by native MuJoCo and the MJX env, from the same state under the same
     (zero) commands, agree; the native log has a row per physics step."""
     env = make("pendulum", episode_length=10)
-    act = _zero_policy(env)
+    act = _constant_policy(env)
     a = native(env, env_model_path(env), act, 2, jax.random.PRNGKey(0))
     assert a.dt == pytest.approx(0.01) and a.qpos.shape == (2, 51, 1) and np.all(a.length == 51)
     sub = a.every(5)
@@ -77,19 +78,11 @@ def test_native_plant_matches_the_env_on_the_envs_own_model():
     assert b.dt == pytest.approx(env.dt) and b.qpos.shape == (2, 11, 1)
 
 
-def _full_torque_policy(env):
-    def act(obs, carry, first, key):
-        return np.ones((obs.shape[0], env.action_size), np.float32), carry
-
-    act.carry_size = 0
-    return act
-
-
 def test_a_fall_ends_the_log_unless_recorded_until_the_end():
     """A hopper under full torque falls (the env terminates it); ``until_end`` logs on to the
     episode's length, the same samples up to the fall, the same return (counted to the fall)."""
     env = make("hopper", episode_length=60)
-    act = _full_torque_policy(env)
+    act = _constant_policy(env, 1.0)
     a = native(env, env_model_path(env), act, 2, jax.random.PRNGKey(0))
     b = native(env, env_model_path(env), act, 2, jax.random.PRNGKey(0), until_end=True)
     full = 60 * 4 + 1  # 4 physics steps of 2 ms per control step, and the initial state
@@ -104,7 +97,7 @@ def test_a_fall_ends_the_log_unless_recorded_until_the_end():
 @pytest.mark.slow  # compiles the hopper's MJX rollout twice (80 s on 2 cores)
 def test_a_fall_in_the_env_is_logged_until_the_end_when_asked():
     env = make("hopper", episode_length=60)
-    act = _full_torque_policy(env)
+    act = _constant_policy(env, 1.0)
     a = simulated(env, env.default_z(), act, 2, jax.random.PRNGKey(0))
     b = simulated(env, env.default_z(), act, 2, jax.random.PRNGKey(0), until_end=True)
     assert np.all(a.length < 61) and np.all(b.length == 61)
@@ -115,7 +108,7 @@ def test_a_fall_in_the_env_is_logged_until_the_end_when_asked():
 
 def test_recordings_round_trip_into_the_diagnosis_reader(tmp_path):
     env = make("pendulum", episode_length=10)
-    r = native(env, PLANT, _zero_policy(env), 2, jax.random.PRNGKey(1), noise=1e-3)
+    r = native(env, PLANT, _constant_policy(env), 2, jax.random.PRNGKey(1), noise=1e-3)
     paths = r.write(str(tmp_path))
     rec = rec_lib.load(paths[0], env.mj_model)
     assert rec.dt == pytest.approx(0.01) and len(rec) == 51
@@ -127,7 +120,7 @@ def test_native_target_must_have_the_envs_joints(tmp_path):
     xml = tmp_path / "other.xml"
     xml.write_text(open(PLANT).read().replace('name="hinge"', 'name="axle"').replace('joint="hinge"', 'joint="axle"'))
     with pytest.raises(KeyError, match="unknown joint.*hinge"):
-        native(env, str(xml), _zero_policy(env), 1, jax.random.PRNGKey(0))
+        native(env, str(xml), _constant_policy(env), 1, jax.random.PRNGKey(0))
 
 
 def _diagnosis(tmp_path, model, fitted, selected, nominal=None, period=0.01):
