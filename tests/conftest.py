@@ -14,8 +14,9 @@ jax.config.update("jax_compilation_cache_dir", tempfile.mkdtemp(prefix="sim2real
 jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
 # Most tests spend their time compiling (a PPO update, a training chunk, a batched rollout) and
 # run the result briefly: they compile with most of XLA's optimisations off, which compiles 2-3x
-# faster (the SimOpt script test: 168 s -> 68 s; the suite 2145 s -> 1382 s on 2 cores). The program is the same; only LLVM's
-# work on it (vectorisation, unrolling) differs, so results differ by rounding alone. Tests whose
+# faster (the SimOpt script test: 168 s -> 68 s; the suite 2145 s -> 1382 s on 2 cores). The
+# program is the same; only LLVM's work on it (vectorisation, unrolling) differs, so results
+# differ by rounding alone. Tests whose
 # time is spent running -- the diagnosis' thousands of simulated segments, PPO to a learned
 # swing-up -- would run 2x slower that way, and those that check a learning outcome are
 # sensitive to rounding: they are marked ``optimized`` and compile as users do. Subprocesses

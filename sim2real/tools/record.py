@@ -149,7 +149,7 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
     length = np.full(episodes, n_s)
     ret = np.zeros(episodes)
     alive = np.ones(episodes, bool)  # the return counts while the env would not have terminated
-    logging = np.ones(episodes, bool)  # stepped and logged (past the termination with ``until_end``)
+    logged = np.ones(episodes, bool)  # stepped and logged (past the termination with ``until_end``)
     observe = jax.jit(jax.vmap(env.observe))
     data0 = env._data0
 
@@ -180,7 +180,7 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
         u = np.asarray(u, np.float64)
         first = jnp.zeros(episodes, bool)
         q_before, v_before = state()
-        live = np.nonzero(logging)[0]
+        live = np.nonzero(logged)[0]
         for e in live:
             datas[e].ctrl[aid] = u[e]
         for s in range(sub):  # the command is held over the control step; every physics step logged
@@ -193,13 +193,13 @@ def native(env: Env, xml_path: str, act, episodes: int, key, noise: float = 0.0,
         r, term = task(*(jnp.asarray(x, jnp.float32) for x in (q_before, v_before, q_after, v_after, u)), goal)
         r, term = np.asarray(r), np.asarray(term) | ~ok
         ret += np.where(alive, np.where(ok, r, 0.0), 0.0)
-        stop = logging & (~ok if until_end else term)
+        stop = logged & (~ok if until_end else term)
         length[stop] = (t + 1) * sub + 1
         alive &= ~term
-        logging &= ~stop
+        logged &= ~stop
         if progress is not None:
             progress(t + 1, T)
-        if not logging.any():
+        if not logged.any():
             break
     ctrl[:, -1] = ctrl[:, -2]
     return Rollouts(float(m.opt.timestep), qpos, qvel, ctrl, length, ret, joints, acts)
@@ -223,9 +223,9 @@ def simulated(env: Env, z, act, episodes: int, key, until_end: bool = False) -> 
             u, carry = act(s.obs, carry, first, k_act)
             s2 = jax.vmap(env.step, in_axes=(0, 0, None))(s, u, z)
             ret = ret + jnp.where(alive, s2.reward, 0.0)
-            logging = jnp.ones_like(alive) if until_end else alive
-            n = n + logging
-            s = jax.tree_util.tree_map(lambda a, b: jnp.where(logging.reshape((-1,) + (1,) * (a.ndim - 1)), a, b), s2, s)
+            logged = jnp.ones_like(alive) if until_end else alive
+            n = n + logged
+            s = jax.tree_util.tree_map(lambda a, b: jnp.where(logged.reshape((-1,) + (1,) * (a.ndim - 1)), a, b), s2, s)
             alive = alive & ~s2.terminated
             q = sense(s.data.qpos, jax.random.split(k_sense, episodes))
             return (s, carry, alive, jnp.zeros_like(first), ret, n), (q, s.data.qvel, u)
