@@ -5,10 +5,12 @@
 # Run from the repo root on the device with the wheels of .whlmin installed; results land in $OUT.
 #   first call:  bash device_run.sh
 #   second call: METHODS=nominal,simopt,diag_dr_1 NOBASE=1 EXTRA='config_set=env_options.max_delay=8' bash device_run.sh
+#   third call:  WARM=false EXTRA='config_set=env_options.max_delay=8' bash device_run.sh
+#                (the loop trains from scratch; EXTRA reaches the baselines too)
 set -u
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whlmin/*.whl
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_MEM_FRACTION=0.4
-COMMON="env=hopper seeds=3 total_steps=30000000 loop_warm_start=true record_until_end=true"
+COMMON="env=hopper seeds=3 total_steps=30000000 loop_warm_start=${WARM:-true} record_until_end=true"
 METHODS=${METHODS:-nominal,diag_dr_1}
 EXTRA=${EXTRA:-}
 LIMIT=${LIMIT:-540}
@@ -19,7 +21,7 @@ for s in 0 1 2; do
 done
 if [ "${NOBASE:-0}" != 1 ]; then
   CUDA_VISIBLE_DEVICES=1 timeout $LIMIT python benchmarks/closed_loop.py $COMMON methods=udr_wide,oracle \
-    out=$OUT/base work=/tmp/cl_base "device=NVIDIA H200 (2xH200 host)" > $OUT/logs/base.txt 2>&1 &
+    out=$OUT/base work=/tmp/cl_base "device=NVIDIA H200 (2xH200 host)" $EXTRA > $OUT/logs/base.txt 2>&1 &
 fi
 wait
 # the diagnoses themselves (diagnosis.json, the recordings' record.json) beside the tables
