@@ -265,6 +265,36 @@ def test_a_diagnosis_the_loop_cannot_use_trains_on_the_fallback_box(run_dir, tmp
     assert not os.path.exists(tmp_path / "bad")
 
 
+def test_a_diagnosed_delay_past_the_envs_delay_line_lengthens_it(run_dir, tmp_path, monkeypatch):
+    """A fitted delay whose box (value +- k std) reaches past the env's delay line (4 control
+    steps) is trained with a line long enough for it, not refused (the hopper's 4.34 steps)."""
+    import importlib
+
+    from sim2real.tools import loop
+
+    diag_lib = importlib.import_module("sim2real.sysid.diagnose")
+    env = make("pendulum")
+    steps, sd = 5.2, 0.3  # in recording samples at twice the control rate: 10.4 and 0.6 samples
+
+    def fake(cfg):
+        d = {"model": env_model_path(type(env)), "answer": "effects", "sample_period": env.dt / 2,
+             "fitted_params": {"action_delay": 2 * steps}, "nominal_refit": {},
+             "selected": [{"effect": "action_delay", "target": "", "params": {"action_delay": 2 * steps},
+                           "std": {"action_delay": 2 * sd}}], "fit": {"before": 1.0, "after": 0.5}}
+        os.makedirs(cfg.out)
+        with open(os.path.join(cfg.out, "diagnosis.json"), "w") as f:
+            json.dump(d, f)
+        return d
+
+    monkeypatch.setattr(diag_lib, "diagnose", fake)
+    it = loop.iteration(run_dir, tiny(tmp_path), PLANT, str(tmp_path / "it"), 2, noise=1e-3)
+    assert from_diagnosis.delay_line(os.path.join(tmp_path, "it", "diagnosis"), env, 2.0) == 6  # ceil(5.2 + 2 * 0.3)
+    cfg = yaml.safe_load(open(os.path.join(it["run"], "config.yaml")))
+    assert cfg["env_options"]["max_delay"] == 6
+    i = cfg["dr"]["params"].index("action_delay")
+    assert cfg["dr"]["low"][i] == pytest.approx(steps - 2 * sd) and cfg["dr"]["high"][i] == pytest.approx(steps + 2 * sd)
+
+
 @pytest.fixture(scope="module")
 def dr_run(tmp_path_factory):
     """A tiny 2-seed run with a 2-D DR box (shared: each training costs a compilation)."""

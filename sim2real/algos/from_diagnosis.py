@@ -93,9 +93,8 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
                           f"model's {_default_in_diagnosis(d, name):.4g} (the diagnosis' own note: it stands in "
                           f"for missing physics); env '{env.name}' keeps its own", stacklevel=2)
             continue
-        if name == "action_delay":  # samples of the recordings -> control steps of the env
-            scale = float(d["sample_period"]) / env.dt
-            value, sd = value * scale, sd * scale
+        if name == "action_delay":
+            value, sd = value * _steps_per_sample(d, env), sd * _steps_per_sample(d, env)
         elif kind == "damping":
             j = mujoco.mj_name2id(em, mujoco.mjtObj.mjOBJ_JOINT, target)
             if j >= 0 and damping_dofs == [int(em.jnt_dofadr[j])]:
@@ -121,6 +120,27 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
     return out
 
 
+def delay_line(path: str, env: Env, k: float) -> int:
+    """Control steps of delay line that a diagnosis' box needs: ``ceil(delay + k std)`` of its
+    fitted ``action_delay`` in the env's steps (``ceil(delay)`` without a std; 0 without a
+    delay). ``scripts/loop.py`` raises ``env_options.max_delay`` to it, since a delay beyond the
+    env's line is refused (the line's length is not in the observation, so a warm-started policy
+    runs unchanged on a longer one)."""
+    d = load(path)
+    value = d["fitted_params"].get("action_delay")
+    if value is None:
+        return 0
+    sd = next((s["std"]["action_delay"] for s in d["selected"] if s.get("std", {}).get("action_delay") is not None),
+              None)
+    top = float(value) + (k * float(sd) if sd is not None and np.isfinite(float(sd)) else 0.0)
+    return int(math.ceil(top * _steps_per_sample(d, env) - 1e-9))
+
+
+def _steps_per_sample(d: dict, env: Env) -> float:
+    """The delay is in samples of the recordings in a diagnosis, in control steps in an env."""
+    return float(d["sample_period"]) / env.dt
+
+
 def _default_in_diagnosis(d: dict, name: str) -> float:
     r = d["nominal_refit"].get(name)
     return float(r["nominal"]) if r else 0.0
@@ -140,7 +160,7 @@ def resolve(dr: DRConfig, env: Env) -> DRConfig:
             continue
         p = env.spec[name]
         if not p.low <= value <= p.high:
-            hint = " (raise env_options.max_delay)" if name == "action_delay" else ""
+            hint = " (raise env_options.max_delay; scripts/loop.py does)" if name == "action_delay" else ""
             raise ConfigError(f"dr.from_diagnosis: fitted {name} = {value:g} {p.unit} is outside the env's bounds "
                               f"[{p.low:g}, {p.high:g}]{hint}")
         lo, hi = max(p.low, value - dr.diagnosis_k * sd), min(p.high, value + dr.diagnosis_k * sd)

@@ -17,6 +17,10 @@ policy falls within 0.1 s on its real plant, and three such recordings gave mass
 model's beside a delay where the plant has a lag (``benchmarks/closed_loop.py``). The next
 iteration records the fallback's policy, which stays up longer, and diagnoses again.
 
+A diagnosed delay whose box reaches past the env's delay line is trained with a longer line
+(``env_options.max_delay``: ``from_diagnosis.delay_line``), where ``dr.from_diagnosis`` alone
+would refuse it.
+
 The training config is the same base for every iteration (each diagnosis replaces the last one's
 physics rather than adding to it); each diagnosis is of the real system, so what the first one
 missed the second may find in recordings of a policy that behaves differently.
@@ -112,6 +116,7 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
     diagnosis is ``unusable`` (``LoopConfig.fallback``); ``until_end``: ``LoopConfig.until_end``."""
     import warnings
 
+    from sim2real.algos import from_diagnosis
     from sim2real.common import config as config_lib
     from sim2real.envs import make
     from sim2real.envs.registry import env_class
@@ -128,7 +133,8 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
     # targets are names in its own MJCF, which the diagnosis checks), and every parameter of an
     # effect must be one of its physics' (a payload at a fitted distance along the pole, or a
     # backlash's motor-side inertia, which ``dr.from_diagnosis`` would refuse, is not searched)
-    env_names = make(base.env, **dict(base.env_options)).spec.names
+    env = make(base.env, **dict(base.env_options))
+    env_names = env.spec.names
     env_targets = sorted({n.split(":", 1)[1] for n in env_names if ":" in n})
     dcfg = config_lib.load(DiagnoseConfig, [f"model={model}", f"recordings=[{','.join(paths[:-1])}]",
                                             f"heldout=[{paths[-1]}]", f"out={os.path.join(out, 'diagnosis')}",
@@ -144,6 +150,12 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
         warnings.warn(f"loop: {why}; no fallback box given (fallback.params=...), so it trains on it anyway",
                       stacklevel=2)
     cfg = dataclasses.replace(base, name="run", out_dir=out, resume=False, overwrite=False, progress=progress, dr=dr)
+    if dr.from_diagnosis:
+        need = from_diagnosis.delay_line(dr.from_diagnosis, env, dr.diagnosis_k)
+        if need > env.config.max_delay:
+            print(f"loop: the diagnosed delay's box reaches {need} control steps, beyond env '{base.env}''s "
+                  f"delay line of {env.config.max_delay}: trained with env_options.max_delay={need}")
+            cfg = dataclasses.replace(cfg, env_options={**dict(base.env_options), "max_delay": need})
     if warm_start:
         cfg = dataclasses.replace(cfg, algo_options={**cfg.algo_options, "warm_start": os.path.abspath(run_dir),
                                                      "warm_start_seed": run_seed if base.num_seeds == 1 else -1})
