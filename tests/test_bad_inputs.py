@@ -142,6 +142,10 @@ CASES = [
     ("model_ball_joint", "diagnose", ["model=ball.xml", "recordings=[a.csv]"],
      {"ball.xml": '<mujoco><worldbody><body><joint name="hinge" type="ball"/><geom size=".1"/></body>'
                   '</worldbody></mujoco>'}, "joint 'hinge' is not a hinge or slide"),
+    ("model_site_transmission", "diagnose", ["model=site.xml", "recordings=[a.csv]"],
+     {"site.xml": '<mujoco><worldbody><body><joint name="hinge"/><geom size=".1"/><site name="s"/></body>'
+                  '</worldbody><actuator><motor name="thrust" site="s" gear="0 0 1 0 0 0"/></actuator></mujoco>'},
+     "actuator 'thrust' has a site transmission; the diagnosis handles actuators on joints and tendons only"),
     ("model_other_joints", "diagnose", [f"model={os.path.join(ASSETS, 'arm2.xml')}", "recordings=[a.csv]"], {},
      "names joint 'hinge'"),
     ("model_required", "diagnose", ["recordings=[a.csv]"], {}, "model=PATH.xml is required"),

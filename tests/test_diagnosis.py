@@ -718,6 +718,46 @@ _MOTOR = """<mujoco model="p"><option timestep="0.001" integrator="RK4"/>
   <actuator><motor name="m" joint="hinge" gear="1" ctrllimited="true" ctrlrange="-2 2"/></actuator></mujoco>"""
 
 
+_TENDON_ARM = """<mujoco><option timestep="0.002"/><worldbody>
+<body name="upper"><joint name="shoulder" axis="0 1 0" damping="0.05"/>
+<geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/>
+<body name="lower" pos="0 0 -0.3"><joint name="elbow" axis="0 1 0" damping="0.05"/>
+<geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.3"/></body></body></worldbody>
+<tendon><fixed name="cable"><joint joint="shoulder" coef="1"/><joint joint="elbow" coef="0.5"/></fixed></tendon>
+<actuator>ACTUATOR<motor name="elbow_motor" joint="elbow"/></actuator></mujoco>"""
+
+
+def test_a_tendon_driven_arm_is_diagnosed(tmp_path):
+    """An actuator that pulls a tendon (a cable coupling both joints) is diagnosed like one on a
+    joint: the truth (native MuJoCo) passes that actuator's command through MuJoCo's own 40 ms
+    filter, logged at 250 Hz from 2 ms physics, the clock starting at 3.7 s, no qvel; a lag is
+    named on it. A backlash is not searched there (no joint of its own), and the report says so."""
+    nominal = _TENDON_ARM.replace("ACTUATOR", '<motor name="cable_motor" tendon="cable"/>')
+    truth = mujoco.MjModel.from_xml_string(_TENDON_ARM.replace(
+        "ACTUATOR", '<general name="cable_motor" tendon="cable" dyntype="filterexact" dynprm="0.04"/>'))
+    (tmp_path / "arm.xml").write_text(nominal)
+    paths = []
+    for i in range(3):
+        rng, d, rows = np.random.default_rng(i), mujoco.MjData(truth), []
+        for k in range(1500):  # 6 s; random steps every 0.16 s
+            if k % 40 == 0:
+                d.ctrl[:] = rng.uniform(-1, 1, 2)
+            rows.append([3.7 + k / 250, *(d.qpos + 1e-3 * rng.standard_normal(2)), *d.ctrl])
+            for _ in range(2):
+                mujoco.mj_step(truth, d)
+        paths.append(str(tmp_path / f"run{i}.csv"))
+        np.savetxt(paths[-1], rows, delimiter=",", comments="",
+                   header="time,qpos:shoulder,qpos:elbow,ctrl:cable_motor,ctrl:elbow_motor")
+    d = diagnose(DiagnoseConfig(model=str(tmp_path / "arm.xml"), recordings=tuple(paths[:2]), heldout=(paths[2],),
+                                out=str(tmp_path / "diag"), plots=False, progress=False))
+    assert _named(d) == [("motor_lag", "cable_motor")]
+    assert d["selected"][0]["params"]["motor_lag:cable_motor"] == pytest.approx(0.04, rel=0.25)
+    assert "backlash not searched on cable_motor: it pulls a tendon, not a joint of its own" in d["notes"]
+    assert d["fit"]["after"] < 0.5 * d["fit"]["before"]
+    fitted = mujoco.MjModel.from_xml_path(str(tmp_path / "diag" / "fitted.xml"))  # the lag as MuJoCo's filter
+    assert fitted.actuator_dyntype[0] == mujoco.mjtDyn.mjDYN_FILTEREXACT
+
+
 def test_the_work_balance_sizes_a_friction_past_a_torque_glitch(tmp_path):
     """A torque-driven pendulum with MuJoCo's own friction loss (0.05 N m), the nominal model
     without; one training recording's torque column reads 1.5 N m for 0.3 s that the joint never

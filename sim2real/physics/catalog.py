@@ -12,7 +12,7 @@ import numpy as np
 
 from sim2real.physics import kinds
 from sim2real.physics.kinds.backlash import motor_side_params as backlash_motor_side_params  # noqa: F401
-from sim2real.physics.kinds.base import name_of, unit_for
+from sim2real.physics.kinds.base import actuator_is_linear, name_of, unit_for
 from sim2real.physics.kinds.gain import declare as actuator_gain_params  # noqa: F401
 from sim2real.physics.kinds.gain import gain_law_entries, is_servo  # noqa: F401
 from sim2real.physics.kinds.mass import declare as body_mass_params  # noqa: F401
@@ -63,8 +63,8 @@ def effect_params(m: mujoco.MjModel, joints, actuators, bodies) -> list[Param]:
                             (BODY_EFFECTS, bodies, _BODY)):
         for i in ids:
             name = name_of(m, obj, i)
-            j = i if obj == _JOINT else int(m.actuator_trnid[i, 0]) if obj == _ACT else -1
-            slide = j >= 0 and m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
+            slide = (m.jnt_type[i] == mujoco.mjtJoint.mjJNT_SLIDE if obj == _JOINT
+                     else actuator_is_linear(m, i) if obj == _ACT else False)
             for kind, entry in table.items():
                 d, lo, hi, unit, doc = _declared(m, i, kind, entry)
                 ps.append(Param(f"{kind}:{name}", d, lo, hi, unit_for(unit, slide), doc, kind, i))

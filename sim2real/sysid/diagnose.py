@@ -26,6 +26,7 @@ from scipy.optimize import least_squares
 
 from sim2real.common import output
 from sim2real.common.progress import Bar
+from sim2real.physics.kinds.base import actuator_joint
 from sim2real.sysid import energy, invdyn, locate, report
 from sim2real.sysid.candidates import ALL_EFFECTS, EFFECTS, library, scales_from
 from sim2real.sysid.derivatives import velocity_state
@@ -954,7 +955,7 @@ def _locate(system, sh, pred, res, res_fit) -> dict:
     m = system.mj
     for j, jn in enumerate(system.joints):
         dof = m.jnt_dofadr[j]
-        acts = [a for a in range(m.nu) if m.actuator_trnid[a, 0] == j]
+        acts = [a for a in range(m.nu) if actuator_joint(m, a) == j]
         lim, bounds, ctrl = None, None, None
         if acts:
             a = acts[0]

@@ -9,6 +9,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from sim2real.physics.kinds.base import actuator_is_linear  # noqa: E402
+
 
 def _stitch(sh, pred, tiles, key, k, traj_index):
     """Predictions of segments of one trajectory placed on its time axis (NaN elsewhere)."""
@@ -250,8 +252,7 @@ def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_ro
         units[f"qvel:{jn}"] = "m/s" if slide else "rad/s"
         units[jn] = "N" if slide else "N m"
     for a, an in enumerate(system.actuators):
-        slide = system.mj.jnt_type[system.mj.actuator_trnid[a, 0]] == 2
-        units[f"force:{an}"] = "N" if slide else "N m"
+        units[f"force:{an}"] = "N" if actuator_is_linear(system.mj, a) else "N m"
     images = {}
     ti = int(sh.tiles.traj[tiles[0]])
     overlay(os.path.join(out, "overlay.png"), sh, tiles, pred_b, pred_a, ti, names, units)

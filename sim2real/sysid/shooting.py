@@ -183,15 +183,20 @@ class Shooting:
     # ------------------------------------------------------------------------------------------
     def _initial_activation(self, tr) -> np.ndarray:
         m = self.sys.mj
-        act = np.zeros(m.na)
+        act, length = np.zeros(m.na), None
         for a in range(m.nu):
             adr = m.actuator_actadr[a]
             if adr < 0:
                 continue
             if m.actuator_dyntype[a] == mujoco.mjtDyn.mjDYN_INTEGRATOR:
-                # an integrating servo holds its joint where it starts
-                j = m.actuator_trnid[a, 0]
-                act[adr] = m.actuator_gear[a, 0] * tr.q[0, m.jnt_qposadr[j]] if m.actuator_biasprm[a, 1] != 0 else 0.0
+                # an integrating servo holds its joint (or tendon) where it starts: its setpoint
+                # is the actuator's length there (gear x joint position for a joint)
+                if length is None:
+                    d = mujoco.MjData(m)
+                    d.qpos[:] = tr.q[0]
+                    mujoco.mj_forward(m, d)
+                    length = d.actuator_length.copy()
+                act[adr] = length[a] if m.actuator_biasprm[a, 1] != 0 else 0.0
             else:  # filters: at rest under the first command
                 act[adr] = tr.ctrl[0, a]
         return act

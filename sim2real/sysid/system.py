@@ -38,6 +38,9 @@ _INTEGRATOR = {int(mujoco.mjtIntegrator.mjINT_EULER): "Euler", int(mujoco.mjtInt
                int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST): "implicitfast"}
 
 
+_TRANSMISSIONS = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT), int(mujoco.mjtTrn.mjTRN_TENDON))
+
+
 def check_model(m: mujoco.MjModel, xml_path: str) -> None:
     """Refuse what the diagnosis cannot handle, naming the joint or actuator."""
     jn = _names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt)
@@ -48,13 +51,15 @@ def check_model(m: mujoco.MjModel, xml_path: str) -> None:
         if not jn[j]:
             raise ModelError(f"{xml_path}: joint #{j} has no name; name every joint (recordings refer to them)")
     for a in range(m.nu):
-        if m.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT:
-            raise ModelError(f"{xml_path}: actuator #{a} does not drive a joint directly (tendon/site "
-                             "transmissions are not supported)")
-        if not mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a):
+        an = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)
+        if not an:
             raise ModelError(f"{xml_path}: actuator #{a} has no name; name every actuator")
+        if int(m.actuator_trntype[a]) not in _TRANSMISSIONS:
+            kind = mujoco.mjtTrn(m.actuator_trntype[a]).name.removeprefix("mjTRN_").lower()
+            raise ModelError(f"{xml_path}: actuator '{an}' has a {kind} transmission; the diagnosis handles "
+                             "actuators on joints and tendons only")
         if int(m.actuator_dyntype[a]) in (int(mujoco.mjtDyn.mjDYN_MUSCLE), int(mujoco.mjtDyn.mjDYN_USER)):
-            raise ModelError(f"{xml_path}: actuator #{a}: muscle/user dynamics are not supported")
+            raise ModelError(f"{xml_path}: actuator '{an}': muscle/user dynamics are not supported")
 
 
 def _load(xml_path: str) -> mujoco.MjModel:

@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 
 from sim2real._mjx import mjx
-from sim2real.physics.kinds.base import ACTUATOR, Kind, ctrl_limits, name_of, rows, take
+from sim2real.physics.kinds.base import ACTUATOR, Kind, actuator_is_linear, actuator_joint, ctrl_limits, name_of, rows, take
 from sim2real.physics.kinds.gain import nominal_gain
 from sim2real.physics.params import Param
 
@@ -19,9 +19,9 @@ def motor_side_params(m: mujoco.MjModel, actuators, default: float = 1e-2) -> li
     is neutral; the mesh's stiffness beyond the band defaults to 0, a rigid mesh."""
     inertia, stiffness = [], []
     for a in actuators:
-        j = int(m.actuator_trnid[a, 0])
-        arm = float(m.dof_armature[m.jnt_dofadr[j]])
-        slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
+        j = actuator_joint(m, a)
+        arm = float(m.dof_armature[m.jnt_dofadr[j]]) if j >= 0 else 0.0
+        slide = actuator_is_linear(m, a)
         name = name_of(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)
         inertia.append(Param(f"backlash_inertia:{name}", arm if arm > 0 else default, 1e-7, 1e4,
                              "kg" if slide else "kg m^2", "inertia of the motor side crossing the backlash band",
@@ -72,10 +72,14 @@ class Backlash(Kind):
     command_order = 30
 
     def declared(self, m, index, kind, entry):
-        # on an integrating servo the band is not modelled (class docstring): only 0 is allowed
+        # on an integrating servo, or on a tendon (no joint of its own), the band is not modelled
+        # (class docstring): only 0 is allowed
         if kind == "backlash" and m.actuator_dyntype[index] == mujoco.mjtDyn.mjDYN_INTEGRATOR:
             d, lo, hi, unit, doc = entry
             return d, lo, d, unit, doc + " (0 on an integrating servo, where the band is not modelled)"
+        if kind == "backlash" and actuator_joint(m, index) < 0:
+            d, lo, hi, unit, doc = entry
+            return d, lo, d, unit, doc + " (0 on a tendon's actuator, which has no joint of its own)"
         return entry
 
     def setup(self, pm) -> None:
@@ -89,7 +93,8 @@ class Backlash(Kind):
         r = rows(spec, "backlash", acts)
         if not (r >= 0).any():
             return None
-        joint = np.array([m.actuator_trnid[a, 0] for a in acts], np.int32)
+        # (a tendon's actuator: joint 0 stands in, its band held at 0 by ``declared``)
+        joint = np.array([max(actuator_joint(m, a), 0) for a in acts], np.int32)
         arm = np.array([m.dof_armature[m.jnt_dofadr[j]] for j in joint])
         gear = np.array([m.actuator_gear[a, 0] for a in acts])
         g0 = np.array([nominal_gain(m, a) for a in acts])
@@ -189,10 +194,11 @@ class Backlash(Kind):
     def candidates(self, system, sc, add, target) -> None:
         m = system.mj
         an = system.actuators[target]
-        j = int(m.actuator_trnid[target, 0])
-        if system.spec[f"backlash:{an}"].high <= 0:  # (``declared``: an integrating servo)
-            note = (f"backlash not searched on {an}: its command is integrated (an intvelocity servo), which the "
-                    "dead band's model does not hold")
+        j = actuator_joint(m, target)
+        if system.spec[f"backlash:{an}"].high <= 0:  # (``declared``: an integrating servo, a tendon)
+            note = (f"backlash not searched on {an}: " + (
+                "it pulls a tendon, not a joint of its own" if j < 0 else
+                "its command is integrated (an intvelocity servo), which the dead band's model does not hold"))
             if note not in system.notes:
                 system.notes.append(note)
             return

@@ -157,6 +157,29 @@ def ctrl_limits(m: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
             np.where(limited, m.actuator_ctrlrange[:, 1], np.inf))
 
 
+_DIRECT = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
+
+
+def actuator_joint(m: mujoco.MjModel, a: int) -> int:
+    """The joint actuator ``a`` drives directly (a joint transmission), or -1 where it pulls a
+    tendon: its force then reaches the joints through the tendon's moment arms, which MuJoCo
+    computes, so the command path's delay, lag and saturation act on it as on a joint's, while
+    a dead band between a motor and *its* joint is not defined."""
+    return int(m.actuator_trnid[a, 0]) if int(m.actuator_trntype[a]) in _DIRECT else -1
+
+
+def actuator_is_linear(m: mujoco.MjModel, a: int) -> bool:
+    """Its force is in N (a slide joint, a spatial tendon's length in m), not N m (a hinge, a
+    fixed tendon whose first joint is a hinge)."""
+    j = actuator_joint(m, a)
+    if j < 0 and int(m.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_TENDON):
+        adr = int(m.tendon_adr[m.actuator_trnid[a, 0]])
+        if int(m.wrap_type[adr]) != int(mujoco.mjtWrap.mjWRAP_JOINT):
+            return True  # spatial
+        j = int(m.wrap_objid[adr])
+    return j >= 0 and m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
+
+
 def name_of(m: mujoco.MjModel, obj, i: int) -> str:
     n = mujoco.mj_id2name(m, obj, i)
     if not n:
