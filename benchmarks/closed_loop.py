@@ -116,7 +116,8 @@ class Settings:
     record_until_end: the real budget's episodes (SimOpt's and the loop's) are logged on to their
     full length after the env would end them (a hopper's fall; ``record.native``), returns still
     counted to the fall; config_set: extra training settings for every method, ``key=value`` separated by
-    ``;`` (e.g. ``ppo.num_envs=1024;ppo.num_minibatches=16``)."""
+    ``;`` (e.g. ``ppo.num_envs=1024;ppo.num_minibatches=16``); diagnose_set: the loop's diagnosis
+    settings, the same way (e.g. ``effects=[...,motor_lag_all]``: a lag shared by every motor)."""
     env: str = "pendulum"
     seeds: int = 3
     episodes: int = 64
@@ -132,6 +133,7 @@ class Settings:
     loop_deterministic: bool = True
     record_until_end: bool = False
     config_set: str = ""
+    diagnose_set: str = ""
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
 METHODS = ("nominal", "oracle", "udr_wide", "lsdr", "simopt", "diag_dr_1", "diag_dr_2", "oracle_ft")
@@ -245,12 +247,14 @@ def main(args: Settings):
         # a diagnosis the loop cannot train on (inconclusive, or masses > 10x off) falls back to the
         # wide box: what the user would randomise without a diagnosis (``loop.unusable``)
         fallback = _wide(setup) if args.loop_fallback else None
+        diag_opts = [a.strip() for a in args.diagnose_set.split(";") if a.strip()]
         for s in per_seed:
             b = dataclasses.replace(base, seed=s)
             try:
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
                                      run_seed=s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
-                                     deterministic=args.loop_deterministic, until_end=args.record_until_end)
+                                     deterministic=args.loop_deterministic, until_end=args.record_until_end,
+                                     diagnose_options=diag_opts)
             except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
                 _not_run("diag_dr_1", s, f"the diagnosis refused the nominal policy's recordings ({e})")
                 continue
@@ -264,7 +268,8 @@ def main(args: Settings):
                 try:
                     it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
                                          seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
-                                         deterministic=args.loop_deterministic, until_end=args.record_until_end)
+                                         deterministic=args.loop_deterministic, until_end=args.record_until_end,
+                                         diagnose_options=diag_opts)
                 except RecordingError as e:
                     _not_run("diag_dr_2", s, f"the diagnosis refused the first loop's recordings ({e})")
                     continue
@@ -380,7 +385,8 @@ def write(args, setup, rows, diagnoses, seconds, quiet=False):
              f"Truth (env parameters): {setup['truth']}. {args.episodes} episodes per policy and seed; "
              f"{args.seeds} seeds (independent chains). {args.device}: runs are not bit-reproducible across machines."
              + (" The loop fine-tunes the policy that made its recordings (`loop_warm_start=true`)." if args.loop_warm_start
-                else "") + (f" Training settings: `{args.config_set}`." if args.config_set else ""),
+                else "") + (f" Training settings: `{args.config_set}`." if args.config_set else "")
+             + (f" Diagnosis settings: `{args.diagnose_set}`." if args.diagnose_set else ""),
              "", f"| method | mean | min | max | gap closed (nominal -> {ref}) |", "|---|---|---|---|---|"]
     for m, v in by.items():
         gap = (np.mean(v) - nominal) / (oracle - nominal) if np.isfinite(oracle) and oracle != nominal else np.nan

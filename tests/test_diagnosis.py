@@ -758,6 +758,44 @@ def test_a_tendon_driven_arm_is_diagnosed(tmp_path):
     assert fitted.actuator_dyntype[0] == mujoco.mjtDyn.mjDYN_FILTEREXACT
 
 
+def test_a_lag_shared_by_every_motor_is_named_as_one_when_asked(tmp_path):
+    """Both motors of the 2-link arm env lag by 30 ms (MuJoCo's own filter in the truth). One
+    actuator's lag explains half of that, a delay of the whole command more, so the default
+    search names a ~21 ms delay; with ``motor_lag_all`` asked for (identical drives), the one
+    shared lag is named, and the env takes it as each motor's ``motor_lag``."""
+    from sim2real.algos.from_diagnosis import env_values
+    from sim2real.envs import make
+    from sim2real.sysid.candidates import EFFECTS
+
+    assert "motor_lag_all" not in EFFECTS  # (asked for only: the default search is unchanged)
+    xml = os.path.join(ROOT, "sim2real", "envs", "assets", "arm2.xml")
+    spec = mujoco.MjSpec.from_file(xml)
+    for a in spec.actuators:
+        a.dyntype, a.dynprm[0] = mujoco.mjtDyn.mjDYN_FILTEREXACT, 0.03
+    truth = spec.compile()
+    paths = []
+    for i in range(3):
+        rng, d, rows = np.random.default_rng(i), mujoco.MjData(truth), []
+        for k in range(1200):  # 6 s at the model's 5 ms step; random steps every 0.2 s
+            if k % 40 == 0:
+                d.ctrl[:] = rng.uniform(-1, 1, 2)
+            rows.append([k / 200, *(d.qpos + 1e-3 * rng.standard_normal(2)), *d.ctrl])
+            mujoco.mj_step(truth, d)
+        paths.append(str(tmp_path / f"run{i}.csv"))
+        np.savetxt(paths[-1], rows, delimiter=",", comments="", header="time,qpos:shoulder,qpos:elbow,ctrl:shoulder,ctrl:elbow")
+    d = diagnose(DiagnoseConfig(model=xml, recordings=tuple(paths[:2]), heldout=(paths[2],), out=str(tmp_path / "diag"),
+                                plots=False, progress=False, effects=EFFECTS + ("motor_lag_all",)))
+    assert _named(d) == [("motor_lag_all", "")]
+    assert d["selected"][0]["params"]["motor_lag_all"] == pytest.approx(0.03, rel=0.1)
+    assert d["fit"]["after"] < 0.2 * d["fit"]["before"]
+    values = env_values(dict(d, _path="diagnosis.json"), make("arm2"))
+    assert values["motor_lag:shoulder"] == values["motor_lag:elbow"] == (d["fitted_params"]["motor_lag_all"],
+                                                                          pytest.approx(values["motor_lag:elbow"][1]))
+    fitted = mujoco.MjModel.from_xml_path(str(tmp_path / "diag" / "fitted.xml"))  # MuJoCo's filter on both motors
+    assert list(fitted.actuator_dyntype) == [mujoco.mjtDyn.mjDYN_FILTEREXACT] * 2
+    assert fitted.actuator_dynprm[:, 0] == pytest.approx([d["fitted_params"]["motor_lag_all"]] * 2, rel=1e-5)
+
+
 def test_the_work_balance_sizes_a_friction_past_a_torque_glitch(tmp_path):
     """A torque-driven pendulum with MuJoCo's own friction loss (0.05 N m), the nominal model
     without; one training recording's torque column reads 1.5 N m for 0.3 s that the joint never

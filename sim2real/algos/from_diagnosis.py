@@ -5,9 +5,10 @@
 nominal parameter and every parameter of the selected effects (the effect switched on) is set to
 its fitted value, and where the fit gave a standard deviation it is randomised over
 ``value +- dr.diagnosis_k * std`` (clipped to the physical bounds). The diagnosis' names are the
-env's (both come from ``physics/catalog.py``) with two translations: the delay is in recording
-samples there and in control steps here, and a joint's declared damping is the env's
-``joint_damping`` where that parameter drives exactly that joint. A re-fitted mass the diagnosis
+env's (both come from ``physics/catalog.py``) with three translations: the delay is in recording
+samples there and in control steps here, a joint's declared damping is the env's
+``joint_damping`` where that parameter drives exactly that joint, and a lag shared by every
+actuator (``motor_lag_all``) is each actuator's ``motor_lag``. A re-fitted mass the diagnosis
 itself reports as standing in for missing physics (more than ``FAR_MASS`` times off the model's:
 ``diagnose.far_masses``) is not trained on: the env keeps its own, with a warning. What the user's
 ``dr`` already names wins. ``train`` resolves this once, before the run folder is written, so ``config.yaml``
@@ -28,6 +29,7 @@ from sim2real.algos.base import DRConfig
 from sim2real.common.config import ConfigError
 from sim2real.envs.base import Env
 from sim2real.physics import catalog
+from sim2real.physics.kinds.lag import SHARED as SHARED_LAG
 from sim2real.sysid.select import FAR_MASS, is_far_mass
 
 # fitted alongside an effect but with no counterpart in the envs' physics (a payload's distance
@@ -86,6 +88,8 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
             if name in selected_names:
                 missing.append(name)
             continue
+        if name == SHARED_LAG:  # (below, once every actuator's own lag is known)
+            continue
         r = d["nominal_refit"].get(name)
         if kind == "mass" and r and is_far_mass(float(r["nominal"]), float(r["fitted"])):
             # the hopper's first loop: a policy that fell at once gave masses 13-18x the model's
@@ -114,6 +118,12 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
                 missing.append(name)
             continue
         out[name] = (float(value), sd)
+    shared = d["fitted_params"].get(SHARED_LAG, 0.0)
+    if shared > 0:  # one lag on every actuator: each actuator's own, where it has none fitted
+        sd = std.get(SHARED_LAG)
+        for an in catalog.names(em, mujoco.mjtObj.mjOBJ_ACTUATOR):
+            if not out.get(f"motor_lag:{an}", (0.0,))[0] > 0:
+                out[f"motor_lag:{an}"] = (float(shared), float("nan") if sd is None else float(sd))
     if missing:
         raise ConfigError(f"dr.from_diagnosis={d['_path']}: fitted parameter(s) {', '.join(missing)} have no "
                           f"counterpart in env '{env.name}''s physics (its parameters: {', '.join(env.spec.names)})")

@@ -20,6 +20,7 @@ import mujoco
 import numpy as np
 
 from sim2real.physics import catalog
+from sim2real.physics.kinds.lag import shared_param as shared_lag_param
 from sim2real.physics.params import Param
 from sim2real.physics.plant import Plant
 from sim2real.sysid.trajectory import ModelColumns
@@ -121,6 +122,8 @@ class System:
         params += effect
         params += catalog.payload_position_params(m, moving)
         params += catalog.backlash_motor_side_params(m, range(m.nu))
+        if m.nu >= 2:  # one lag shared by every actuator (searched when asked for: kinds/lag.py)
+            params.append(shared_lag_param())
         if declared_fl:
             m.dof_frictionloss[:] = 0.0
             self.notes.append("declared frictionloss (" + ", ".join(f"{jn[j]} {v:g}" for j, v in declared_fl.items())

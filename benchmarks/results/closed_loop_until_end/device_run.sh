@@ -7,17 +7,21 @@
 #   second call: METHODS=nominal,simopt,diag_dr_1 NOBASE=1 EXTRA='config_set=env_options.max_delay=8' bash device_run.sh
 #   third call:  WARM=false EXTRA='config_set=env_options.max_delay=8' bash device_run.sh
 #                (the loop trains from scratch; EXTRA reaches the baselines too)
+#   fourth call: WARM=false EXTRA='config_set=env_options.max_delay=8' \
+#                DIAG='effects=[none,coulomb_friction,viscous_damping,joint_stiffness,sensor_offset,mass_offset,action_delay,motor_lag,actuator_saturation,backlash,motor_lag_all]' \
+#                bash device_run.sh   (the loop's diagnosis may also name one lag shared by every motor)
 set -u
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whlmin/*.whl
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_MEM_FRACTION=0.4
 COMMON="env=hopper seeds=3 total_steps=30000000 loop_warm_start=${WARM:-true} record_until_end=true"
 METHODS=${METHODS:-nominal,diag_dr_1}
 EXTRA=${EXTRA:-}
+DIAG=${DIAG:-}
 LIMIT=${LIMIT:-540}
 mkdir -p $OUT/logs
 for s in 0 1 2; do
   CUDA_VISIBLE_DEVICES=$((s % 2)) timeout $LIMIT python benchmarks/closed_loop.py $COMMON methods=$METHODS only_seeds=$s \
-    out=$OUT/s$s work=/tmp/cl_s$s "device=NVIDIA H200 (2xH200 host, one process per seed)" $EXTRA > $OUT/logs/seed$s.txt 2>&1 &
+    out=$OUT/s$s work=/tmp/cl_s$s "device=NVIDIA H200 (2xH200 host, one process per seed)" $EXTRA ${DIAG:+"diagnose_set=$DIAG"} > $OUT/logs/seed$s.txt 2>&1 &
 done
 if [ "${NOBASE:-0}" != 1 ]; then
   CUDA_VISIBLE_DEVICES=1 timeout $LIMIT python benchmarks/closed_loop.py $COMMON methods=udr_wide,oracle \
