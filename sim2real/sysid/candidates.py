@@ -18,7 +18,7 @@ mass_offset            body        ``payload`` and ``payload_r`` (a point mass a
 action_delay           global      ``action_delay`` (samples, fractional)
 motor_lag              actuator    ``motor_lag`` (time constant, s)
 motor_lag_all          global      ``motor_lag_all`` (one time constant for every actuator; models
-                                   with 2+ actuators)
+                                   with 2+ actuators; searched only when asked for)
 actuator_saturation    actuator    ``saturation`` (force limit, actuator force units)
 backlash               actuator    ``backlash`` (dead band width, joint units), ``backlash_inertia``,
                                    ``backlash_stiffness`` (the mesh's: 0 rigid)

@@ -122,7 +122,7 @@ class System:
         params += effect
         params += catalog.payload_position_params(m, moving)
         params += catalog.backlash_motor_side_params(m, range(m.nu))
-        if m.nu >= 2:  # one lag shared by every actuator (kinds/lag.py)
+        if m.nu >= 2:  # one lag shared by every actuator (searched when asked for: kinds/lag.py)
             params.append(shared_lag_param())
         if declared_fl:
             m.dof_frictionloss[:] = 0.0
