@@ -763,7 +763,7 @@ def test_a_lag_shared_by_every_motor_is_named_as_one_when_asked(tmp_path):
     actuator's lag explains half of that, a delay of the whole command more: the default search
     names a 21 ms delay here. With ``motor_lag_all`` asked for (identical drives), the one shared
     lag is named, and the env takes it as each motor's ``motor_lag``."""
-    from sim2real.algos.from_diagnosis import env_values
+    from sim2real.algos.from_diagnosis import env_values, expressible
     from sim2real.envs import make
     from sim2real.sysid.candidates import EFFECTS
 
@@ -788,6 +788,7 @@ def test_a_lag_shared_by_every_motor_is_named_as_one_when_asked(tmp_path):
     assert _named(d) == [("motor_lag_all", "")]
     assert d["selected"][0]["params"]["motor_lag_all"] == pytest.approx(0.03, rel=0.1)
     assert d["fit"]["after"] < 0.2 * d["fit"]["before"]
+    assert "motor_lag_all" in expressible(make("arm2")) and "motor_lag_all" not in expressible(make("pendulum"))
     values = env_values(dict(d, _path="diagnosis.json"), make("arm2"))
     assert values["motor_lag:shoulder"] == values["motor_lag:elbow"] == (d["fitted_params"]["motor_lag_all"],
                                                                           pytest.approx(values["motor_lag:elbow"][1]))

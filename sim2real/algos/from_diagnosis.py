@@ -79,7 +79,7 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
     selected_names = {n for s in d["selected"] for n in list(s.get("params", {})) + list(s.get("std", {}))}
     em = env.mj_model
     damping_dofs = list(env.joint_damping_dofs(em))
-    out, missing = {}, []
+    out, missing, shared = {}, [], None
     for name, value in d["fitted_params"].items():
         sd = std.get(name)
         sd = float("nan") if sd is None else float(sd)
@@ -89,6 +89,7 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
                 missing.append(name)
             continue
         if name == SHARED_LAG:  # (below, once every actuator's own lag is known)
+            shared = (float(value), sd)
             continue
         r = d["nominal_refit"].get(name)
         if kind == "mass" and r and is_far_mass(float(r["nominal"]), float(r["fitted"])):
@@ -118,16 +119,25 @@ def env_values(d: dict, env: Env) -> dict[str, tuple[float, float]]:
                 missing.append(name)
             continue
         out[name] = (float(value), sd)
-    shared = d["fitted_params"].get(SHARED_LAG, 0.0)
-    if shared > 0:  # one lag on every actuator: each actuator's own, where it has none fitted
-        sd = std.get(SHARED_LAG)
+    if shared is not None and shared[0] > 0:  # one lag on every actuator: each one's own, where it has none
         for an in catalog.names(em, mujoco.mjtObj.mjOBJ_ACTUATOR):
             if not out.get(f"motor_lag:{an}", (0.0,))[0] > 0:
-                out[f"motor_lag:{an}"] = (float(shared), float("nan") if sd is None else float(sd))
+                out[f"motor_lag:{an}"] = shared
     if missing:
         raise ConfigError(f"dr.from_diagnosis={d['_path']}: fitted parameter(s) {', '.join(missing)} have no "
                           f"counterpart in env '{env.name}''s physics (its parameters: {', '.join(env.spec.names)})")
     return out
+
+
+def expressible(env: Env) -> list[str]:
+    """The diagnosis' parameter names this env can take (``DiagnoseConfig.expressible``): its
+    physics' own, and ``motor_lag_all`` where every actuator has a ``motor_lag`` (``env_values``
+    gives it to each)."""
+    names = list(env.spec.names)
+    acts = catalog.names(env.mj_model, mujoco.mjtObj.mjOBJ_ACTUATOR)
+    if len(acts) > 1 and all(f"motor_lag:{an}" in names for an in acts):
+        names.append(SHARED_LAG)
+    return names
 
 
 def delay_line(path: str, env: Env, k: float) -> int:

@@ -116,14 +116,10 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
     diagnosis is ``unusable`` (``LoopConfig.fallback``); ``until_end``: ``LoopConfig.until_end``."""
     import warnings
 
-    import mujoco
-
     from sim2real.algos import from_diagnosis
     from sim2real.common import config as config_lib
     from sim2real.envs import make
     from sim2real.envs.registry import env_class
-    from sim2real.physics import catalog
-    from sim2real.physics.kinds.lag import SHARED as SHARED_LAG
     from sim2real.tools.record import from_run, save
     from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
     from sim2real.training.driver import train
@@ -138,10 +134,7 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
     # effect must be one of its physics' (a payload at a fitted distance along the pole, or a
     # backlash's motor-side inertia, which ``dr.from_diagnosis`` would refuse, is not searched)
     env = make(base.env, **dict(base.env_options))
-    env_names = list(env.spec.names)
-    acts = catalog.names(env.mj_model, mujoco.mjtObj.mjOBJ_ACTUATOR)
-    if len(acts) > 1 and all(f"motor_lag:{an}" in env_names for an in acts):
-        env_names.append(SHARED_LAG)  # (``from_diagnosis``: each actuator's own lag)
+    env_names = from_diagnosis.expressible(env)
     env_targets = sorted({n.split(":", 1)[1] for n in env_names if ":" in n})
     dcfg = config_lib.load(DiagnoseConfig, [f"model={model}", f"recordings=[{','.join(paths[:-1])}]",
                                             f"heldout=[{paths[-1]}]", f"out={os.path.join(out, 'diagnosis')}",
