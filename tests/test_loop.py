@@ -148,6 +148,16 @@ def test_diagnosis_becomes_the_physics_and_a_box_around_it(tmp_path):
     assert dr.fixed == {"action_delay": pytest.approx(1.2)}
     # resolving the resolved config again changes nothing (what a resume would see)
     assert from_diagnosis.resolve(dr, env) == dr
+    # ``span``: each box reaches back to the env's own value (no friction, no delay), the
+    # delay without a std too; a value at the env's own stays fixed
+    span = from_diagnosis.resolve(DRConfig(from_diagnosis=diag, diagnosis_k=2.0, diagnosis_box="span"), env)
+    box = dict(zip(span.params, zip(span.low, span.high)))
+    assert box["coulomb:hinge"] == pytest.approx((0.0, 0.32))
+    assert box["action_delay"] == pytest.approx((0.0, 1.2)) and "action_delay" not in span.fixed
+    assert box["mass:pole"] == pytest.approx((env.spec["mass:pole"].default, 1.2))
+    assert from_diagnosis.resolve(span, env) == span
+    with pytest.raises(config_lib.ConfigError, match="dr.diagnosis_box='wide'"):
+        from_diagnosis.resolve(DRConfig(from_diagnosis=diag, diagnosis_box="wide"), env)
 
 
 def test_a_mass_the_diagnosis_flags_as_standing_in_for_missing_physics_is_not_trained_on(tmp_path):

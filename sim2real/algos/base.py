@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import Any, Literal
 
 import jax.numpy as jnp
 import numpy as np
@@ -24,6 +24,8 @@ class DRConfig:
         env's, randomised over +- ``diagnosis_k`` std (``algos/from_diagnosis.py``; resolved into
         ``params``/``low``/``high``/``fixed`` when training starts).
       diagnosis_k: half-width of that box in standard deviations of the fit.
+      diagnosis_box: ``std``: the box is ``value +- k std``; ``span``: it also reaches back to the
+        env's own (nominal) value, so training sees the model it had as well as the one found.
     """
 
     params: tuple[str, ...] = ()
@@ -32,6 +34,7 @@ class DRConfig:
     fixed: dict[str, float] = dataclasses.field(default_factory=dict)
     from_diagnosis: str = ""
     diagnosis_k: float = 2.0
+    diagnosis_box: Literal["std", "span"] = "std"
 
 
 class DRSpace:

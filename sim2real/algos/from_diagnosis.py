@@ -4,7 +4,12 @@
 ``scripts/diagnose.py`` found on the env's own model into the env's physics: every re-fitted
 nominal parameter and every parameter of the selected effects (the effect switched on) is set to
 its fitted value, and where the fit gave a standard deviation it is randomised over
-``value +- dr.diagnosis_k * std`` (clipped to the physical bounds). The diagnosis' names are the
+``value +- dr.diagnosis_k * std`` (clipped to the physical bounds). With ``dr.diagnosis_box=span``
+the box also reaches back to the env's own value of the parameter (a friction from 0, a mass
+from the model's): the fit's std says how well the recordings pin the value down, not how far
+the plant may be from the fitted model, and a box spanning the model the policy was trained on
+and the one found hedges between the two (and keeps the easier physics a policy learns first
+in the box; the closed-loop benchmark's cart-pole, README). The diagnosis' names are the
 env's (both come from ``physics/catalog.py``) with three translations: the delay is in recording
 samples there and in control steps here, a joint's declared damping is the env's
 ``joint_damping`` where that parameter drives exactly that joint, and a lag shared by every
@@ -172,6 +177,9 @@ def resolve(dr: DRConfig, env: Env) -> DRConfig:
         return dr
     if not dr.diagnosis_k > 0:
         raise ConfigError(f"dr.diagnosis_k={dr.diagnosis_k}: must be > 0 (the box is value +- k std)")
+    if dr.diagnosis_box not in ("std", "span"):
+        raise ConfigError(f"dr.diagnosis_box={dr.diagnosis_box!r}: must be 'std' (value +- k std) or 'span' "
+                          "(that box reaching back to the env's own value)")
     d = load(dr.from_diagnosis)
     params, low, high = list(dr.params), list(dr.low), list(dr.high)
     fixed = dict(dr.fixed)
@@ -183,11 +191,15 @@ def resolve(dr: DRConfig, env: Env) -> DRConfig:
             hint = " (raise env_options.max_delay; scripts/loop.py does)" if name == "action_delay" else ""
             raise ConfigError(f"dr.from_diagnosis: fitted {name} = {value:g} {p.unit} is outside the env's bounds "
                               f"[{p.low:g}, {p.high:g}]{hint}")
-        lo, hi = max(p.low, value - dr.diagnosis_k * sd), min(p.high, value + dr.diagnosis_k * sd)
-        if np.isfinite(sd) and hi - lo > 1e-6 * max(abs(value), 1e-6):
+        k_sd = dr.diagnosis_k * sd if np.isfinite(sd) else 0.0
+        lo, hi = value - k_sd, value + k_sd
+        if dr.diagnosis_box == "span":
+            lo, hi = min(lo, float(p.default)), max(hi, float(p.default))
+        lo, hi = max(p.low, lo), min(p.high, hi)
+        if (np.isfinite(sd) or dr.diagnosis_box == "span") and hi - lo > 1e-6 * max(abs(value), 1e-6):
             params.append(name)
             low.append(float(lo))
             high.append(float(hi))
-        else:  # no spread known (or none at all): the fitted value
+        else:  # no spread known (or none at all; ``span``: the env's own value): the fitted value
             fixed[name] = float(value)
     return dataclasses.replace(dr, params=tuple(params), low=tuple(low), high=tuple(high), fixed=fixed)
