@@ -10,6 +10,9 @@
 #   fourth call: WARM=false EXTRA='config_set=env_options.max_delay=8' \
 #                DIAG='effects=[none,coulomb_friction,viscous_damping,joint_stiffness,sensor_offset,mass_offset,action_delay,motor_lag,actuator_saturation,backlash,motor_lag_all]' \
 #                bash device_run.sh   (the loop's diagnosis may also name one lag shared by every motor)
+#   fifth call:  as the fourth, with EXTRA='config_set=env_options.max_delay=8;dr.diagnosis_box=span'
+#                (the loop's box reaches back to the env's own values: dr.diagnosis_box=span)
+#   sixth call:  as the fifth, with ';seed=1' added to EXTRA's config_set (three new chains)
 set -u
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whlmin/*.whl
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_MEM_FRACTION=0.4
