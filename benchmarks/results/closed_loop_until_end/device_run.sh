@@ -13,6 +13,7 @@
 #   fifth call:  as the fourth, with EXTRA='config_set=env_options.max_delay=8;dr.diagnosis_box=span'
 #                (the loop's box reaches back to the env's own values: dr.diagnosis_box=span)
 #   sixth call:  as the fifth, with ';seed=1' added to EXTRA's config_set (three new chains)
+#   seventh call: as the fifth, with ';seed=2' (three more)
 set -u
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whlmin/*.whl
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_MEM_FRACTION=0.4
