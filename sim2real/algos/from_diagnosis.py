@@ -196,7 +196,7 @@ def resolve(dr: DRConfig, env: Env) -> DRConfig:
         if dr.diagnosis_box == "span":
             lo, hi = min(lo, float(p.default)), max(hi, float(p.default))
         lo, hi = max(p.low, lo), min(p.high, hi)
-        if (np.isfinite(sd) or dr.diagnosis_box == "span") and hi - lo > 1e-6 * max(abs(value), 1e-6):
+        if hi - lo > 1e-6 * max(abs(value), 1e-6):  # (no std and ``std``: lo == hi)
             params.append(name)
             low.append(float(lo))
             high.append(float(hi))
