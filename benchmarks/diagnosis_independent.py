@@ -2,13 +2,14 @@
 effects implemented there, fresh MJCF), a tuning half and a frozen test half.
 
     python benchmarks/diagnosis_independent.py split=tuning          # what thresholds may look at
-    python benchmarks/diagnosis_independent.py split=test            # the headline (each run is logged)
+    python benchmarks/diagnosis_independent.py split=test            # the first test half (each run is logged)
+    python benchmarks/diagnosis_independent.py split=fresh jobs=2    # the second, fresh test list (logged)
     python benchmarks/diagnosis_independent.py split=tuning only=arm2 jobs=2
 
 Per case: 2 training recordings and 1 held-out recording; the diagnosis runs on its defaults with
 the nominal MJCF. Writes ``<out>/<split>/cases.csv`` (one row per case), ``summary.md`` (the
-figures, confusion table and per-condition accuracy) and, for the test split, appends the run to
-``test_split_looks.md``.
+figures, confusion table and per-condition accuracy) and, for a test list (``test``, ``fresh``),
+appends the run to ``test_split_looks.md`` or ``fresh_split_looks.md``.
 
 Scoring: a single-effect case counts as *named* when the diagnosis selects exactly the hidden
 effect at its target (nothing else); a two-effect case when it selects both (and nothing else);
@@ -164,7 +165,7 @@ class Settings:
     kept; out: results root; tag: suffix of the results folder; jobs: processes; note: a line for the
     test-split log (why this look); diagnose: diagnosis settings other than the defaults
     (``diagnose.min_gain=0.01``; tuning runs only)."""
-    split: Literal["tuning", "test", "all", "extra", "focus"] = "tuning"
+    split: Literal["tuning", "test", "all", "extra", "focus", "fresh"] = "tuning"
     only: str = ""
     work: str = os.path.join("runs", "sysid_cases")
     out: str = OUT
@@ -176,15 +177,16 @@ class Settings:
 
 def main(args: Settings):
     cases = [c for c in (sysid_cases.focus_cases() if args.split == "focus"
-                         else sysid_cases.build_cases(extra=args.split == "extra"))
+                         else sysid_cases.build_cases(extra=args.split == "extra", fresh=args.split == "fresh"))
              if (args.split == "all" or c.split == args.split) and args.only in c.label]
-    print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(sysid_cases.build_cases())})", flush=True)
+    listed = sysid_cases.build_cases(fresh=args.split == "fresh")
+    print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(listed)})", flush=True)
     os.makedirs(args.work, exist_ok=True)
     out = os.path.join(args.out, args.split + args.tag)
     os.makedirs(out, exist_ok=True)
     options = dict(args.diagnose)
-    if options and args.split == "test":
-        raise SystemExit("the test split is run with the defaults only")
+    if options and args.split in ("test", "fresh"):
+        raise SystemExit(f"the {args.split} list is a test list: it is run with the defaults only")
     rows = []
     t_start = time.time()
     if args.jobs > 1:
@@ -209,8 +211,8 @@ def main(args: Settings):
     with open(os.path.join(out, "summary.md"), "w") as f:
         f.write(text)
     print(text)
-    if args.split == "test" and not args.only:
-        log = os.path.join(args.out, "test_split_looks.md")
+    if args.split in ("test", "fresh") and not args.only:
+        log = os.path.join(args.out, f"{args.split}_split_looks.md")
         with open(log, "a") as f:
             f.write(f"- {time.strftime('%Y-%m-%d %H:%M')}: commit {_commit()}, {len(rows)} cases, "
                     f"{time.time() - t_start:.0f} s. {args.note}\n")

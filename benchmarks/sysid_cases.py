@@ -21,6 +21,10 @@ tuned on before it is kept. It is not part of the frozen list (its fingerprint i
 ``focus_cases()`` is a third tuning list (seeds 3000 and up, split ``focus``), made when backlash
 and payloads were the kinds the diagnosis missed most on both tuning lists: every system's
 backlash and payload targets, twice each, by the same designs and magnitudes.
+``build_cases(fresh=True)`` is a second *test* list (seeds 4000 and up, split ``fresh``), drawn by
+the same recipe on 2026-11-28 and frozen (``results/diagnosis_independent/cases_fresh_frozen.json``)
+before it was run once: the first test half had been looked at thirty times by then, and a
+figure from a list looked at that often is partly a tuning figure. Nothing is tuned on it.
 """
 from __future__ import annotations
 
@@ -40,6 +44,7 @@ RATES = (100.0, 200.0, 500.0, 1000.0)
 EXCITATIONS = ("multisine", "chirp", "prbs", "steps", "pd")
 EXTRA_SEED = 1000  # first seed of the extra (tuning) list: build_cases(extra=True)
 FOCUS_SEED = 3000  # first seed of the focus (tuning) list: focus_cases()
+FRESH_SEED = 4000  # first seed of the fresh test list: build_cases(fresh=True)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -339,6 +344,8 @@ class Case:
 
     @property
     def split(self) -> str:
+        if self.seed >= FRESH_SEED:
+            return "fresh"
         if self.seed >= FOCUS_SEED:
             return "focus"
         if self.seed >= EXTRA_SEED:
@@ -398,15 +405,17 @@ def _design(system: System, rng: np.random.Generator, seconds: float | None = No
 
 def _case(seed: int, S: dict, system: str, kind: str, effects: tuple, nominal: tuple) -> Case:
     """One case; its design is drawn from its own seed, so a case does not depend on the list."""
-    return Case(seed, system, kind, effects, nominal, _design(S[system], np.random.default_rng(1000 + seed)))
+    # (the fresh list's own stream: 1000 + seed would reuse the first list's parameter-only draws)
+    rng = np.random.default_rng(1000 + seed if seed < FRESH_SEED else (seed, 20261128))
+    return Case(seed, system, kind, effects, nominal, _design(S[system], rng))
 
 
-def build_cases(extra: bool = False) -> list[Case]:
-    """The frozen case list (``extra``: the second list, same recipe, other seeds). Deterministic:
-    the same list on every machine."""
+def build_cases(extra: bool = False, fresh: bool = False) -> list[Case]:
+    """The frozen case list (``extra``: the second list, same recipe, other seeds; ``fresh``: the
+    second test list, the same recipe again). Deterministic: the same list on every machine."""
     S = systems()
-    first = EXTRA_SEED if extra else 0
-    rng = np.random.default_rng(20261126 if extra else 20261123)
+    first = FRESH_SEED if fresh else EXTRA_SEED if extra else 0
+    rng = np.random.default_rng(20261128 if fresh else 20261126 if extra else 20261123)
     cases: list[Case] = []
 
     def add_pair(system, kind, effects_pair, nominal_pair=((), ())):
