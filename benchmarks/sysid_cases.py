@@ -21,6 +21,8 @@ tuned on before it is kept. It is not part of the frozen list (its fingerprint i
 ``focus_cases()`` is a third tuning list (seeds 3000 and up, split ``focus``), made when backlash
 and payloads were the kinds the diagnosis missed most on both tuning lists: every system's
 backlash and payload targets, twice each, by the same designs and magnitudes.
+``pair_cases()`` is a fourth tuning list (seeds 3500 and up, split ``pairs``): a backlash and a
+Coulomb friction on the same joint, on every system that can have both.
 ``build_cases(fresh=True)`` is a second *test* list (seeds 4000 and up, split ``fresh``), drawn by
 the same recipe on 2026-11-28 and frozen (``results/diagnosis_independent/cases_fresh_frozen.json``)
 before it was run once: the first test half had been looked at thirty times by then, and a
@@ -44,6 +46,7 @@ RATES = (100.0, 200.0, 500.0, 1000.0)
 EXCITATIONS = ("multisine", "chirp", "prbs", "steps", "pd")
 EXTRA_SEED = 1000  # first seed of the extra (tuning) list: build_cases(extra=True)
 FOCUS_SEED = 3000  # first seed of the focus (tuning) list: focus_cases()
+PAIRS_SEED = 3500  # first seed of the backlash + friction (tuning) list: pair_cases()
 FRESH_SEED = 4000  # first seed of the fresh test list: build_cases(fresh=True)
 
 
@@ -346,6 +349,8 @@ class Case:
     def split(self) -> str:
         if self.seed >= FRESH_SEED:
             return "fresh"
+        if self.seed >= PAIRS_SEED:
+            return "pairs"
         if self.seed >= FOCUS_SEED:
             return "focus"
         if self.seed >= EXTRA_SEED:
@@ -496,6 +501,26 @@ def focus_cases() -> list[Case]:
             m = rng.permutation(3)[:2]
             for k in range(2):
                 cases.append(_case(FOCUS_SEED + len(cases), S, name, "single", ((e, t, int(m[k])),), ()))
+    return cases
+
+
+def pair_cases() -> list[Case]:
+    """The pairs list (seeds 3500 and up, split ``pairs``), a fourth tuning list made on
+    2026-11-28 when the fresh test list showed backlash pairs named least: on every actuator that
+    can have a modelled backlash, the backlash and a Coulomb friction on its own joint (a gearbox
+    has both), twice each (magnitudes 1 + 2 and 2 + 1, as the pairs of ``build_cases``).
+    Deterministic."""
+    S = systems()
+    cases: list[Case] = []
+    for name, sysm in S.items():
+        integrating = {a.name for a in sysm.actuators if a.kind == "intvelocity"}
+        app = set(applicable(sysm))
+        for a in sysm.actuators:
+            if a.name in integrating or ("backlash", a.name) not in app or ("coulomb_friction", a.joint) not in app:
+                continue
+            for mb, mf in ((1, 2), (2, 1)):
+                cases.append(_case(PAIRS_SEED + len(cases), S, name, "double",
+                                   (("backlash", a.name, mb), ("coulomb_friction", a.joint, mf)), ()))
     return cases
 
 

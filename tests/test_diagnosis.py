@@ -393,6 +393,35 @@ def test_a_pair_that_joined_together_is_judged_as_one_by_the_backward_check():
     assert M.effects == [] and "coulomb_friction@j + action_delay were dropped" in sel.pruned[0]
 
 
+def test_a_backlash_beside_a_named_friction_is_fitted_whatever_its_screen_score():
+    """``SelectConfig.geared``: once a Coulomb friction is named on a joint, the backlash on that
+    joint's actuator joins the candidates fitted in the round (the screen's linearisation in the
+    width ranked the pairs list's true bands below the four fitted); a backlash on another joint's
+    actuator, one already chosen, or a model without a friction adds nothing; off, nothing."""
+    from sim2real.sysid.candidates import Candidate
+    from sim2real.sysid.select import Trial
+
+    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody>
+      <body name="a"><joint name="ja" axis="0 1 0"/><geom size="0.1" mass="1"/>
+        <body name="b" pos="0 0 -0.3"><joint name="jb" axis="0 1 0"/><geom size="0.1" mass="1"/></body></body>
+      </worldbody><actuator><motor name="mb" joint="jb"/><motor name="ma" joint="ja"/></actuator></mujoco>""")
+
+    def cand(effect, target):
+        return Candidate(effect, target, (f"{effect}:{target}",), ((0.1,),), (1.0,), ((0.0, 1.0),))
+
+    F = cand("coulomb_friction", "ja")
+    trials = [Trial(cand("backlash", "mb"), -0.5), Trial(cand("backlash", "ma"), -0.2),
+              Trial(cand("motor_lag", "ma"), 0.3)]
+    sel, fit = _selector({frozenset(): (1.0, np.ones(10)), frozenset({F.label}): (1.0, np.ones(10))})
+    sel.f.sh.sys = types.SimpleNamespace(mj=m, actuators=["mb", "ma"], joints=["ja", "jb"])
+    M = fit([F], 0, 0)
+    assert [t.candidate.label for t in sel._geared(M, trials, trials[2:])] == ["backlash@ma"]
+    assert sel._geared(M, trials, trials[1:]) == []                 # already among those fitted
+    assert sel._geared(fit([], 0, 0), trials, trials[2:]) == []     # no friction named
+    sel.cfg = dataclasses.replace(sel.cfg, geared=False)
+    assert sel._geared(M, trials, trials[2:]) == []
+
+
 def test_a_backlash_is_fitted_from_other_widths_of_its_grid_too():
     """``SelectConfig.backlash_starts``: a band's fit moves its width little from where it starts,
     so a backlash is also fitted from the best points at other widths of its grid (``Trial.others``,

@@ -81,6 +81,8 @@ class DiagnoseConfig:
       max_effects: at most this many effects are named.
       plausible_masses: of the effects that pass in a round, one whose fit keeps every re-fitted
         body mass within ``FAR_MASS`` of the model's is preferred (``SelectConfig``).
+      geared: once a Coulomb friction is named on a joint, a backlash on its actuator is fitted in
+        the later rounds whatever its screen score (``SelectConfig``).
       backlash_starts: a backlash is fitted from this many widths of its grid, the best kept
         (``SelectConfig``).
       band_scan: after a backlash's fits, this many widths over its range are simulated together
@@ -142,6 +144,7 @@ class DiagnoseConfig:
     top: int = SelectConfig.top
     max_effects: int = SelectConfig.max_effects
     plausible_masses: bool = SelectConfig.plausible_masses
+    geared: bool = SelectConfig.geared
     backlash_starts: int = SelectConfig.backlash_starts
     band_scan: int = SelectConfig.band_scan
     refine_iters: int = Fitter.refine_iters
@@ -542,7 +545,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                        SelectConfig(min_gain=cfg.min_gain, min_t=cfg.min_t, min_gain_first=cfg.min_gain_first,
                                     floor_level=cfg.floor_level, strong=cfg.strong, top=cfg.top,
                                     max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer,
-                                    plausible_masses=cfg.plausible_masses, backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan),
+                                    plausible_masses=cfg.plausible_masses, geared=cfg.geared,
+                                    backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
                        allowed=cfg.expressible or None)
         final, steps = sel.run()
