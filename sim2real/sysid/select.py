@@ -43,6 +43,7 @@ import dataclasses
 
 import numpy as np
 
+from sim2real.physics.kinds.base import actuator_joint
 from sim2real.sysid.candidates import Candidate
 from sim2real.sysid.fit import Fitter, Result
 
@@ -697,8 +698,6 @@ class Selector:
         among ``chosen`` (``SelectConfig.geared``): fitted whatever their screen score."""
         if not self.cfg.geared:
             return []
-        from sim2real.physics.kinds.base import actuator_joint
-
         sysm = self.f.sh.sys
         rubbing = {c.target for c in M.effects if c.effect == "coulomb_friction"}
         have = {t.candidate.label for t in chosen}
