@@ -181,13 +181,17 @@ def main(args: Settings):
                          else sysid_cases.build_cases(extra=args.split == "extra", fresh=args.split == "fresh"))
              if (args.split == "all" or c.split == args.split) and args.only in c.label]
     listed = sysid_cases.build_cases(fresh=args.split == "fresh")
-    print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(listed)})", flush=True)
-    os.makedirs(args.work, exist_ok=True)
     out = os.path.join(args.out, args.split + args.tag)
-    os.makedirs(out, exist_ok=True)
     options = dict(args.diagnose)
     if options and args.split in ("test", "fresh"):
         raise SystemExit(f"the {args.split} list is a test list: it is run with the defaults only")
+    if args.split in ("test", "fresh") and not args.only and os.path.exists(os.path.join(out, "cases.csv")):
+        # every look at a test list is kept: a second run names its own folder
+        raise SystemExit(f"{out} holds an earlier look at the {args.split} list; give this one a tag= "
+                         f"(e.g. tag=_third_look)")
+    print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(listed)})", flush=True)
+    os.makedirs(args.work, exist_ok=True)
+    os.makedirs(out, exist_ok=True)
     rows = []
     t_start = time.time()
     if args.jobs > 1:
