@@ -116,7 +116,7 @@ def run_case(case: sysid_cases.Case, work: str, settings: dict | None = None) ->
     return row
 
 
-def summarise(rows: list[dict], title: str, jobs: int = 1) -> str:
+def summarise(rows: list[dict], title: str, jobs: int = 1, devices: int = 1) -> str:
     def pct(a, b):
         return f"{a}/{b} ({100 * a / b:.0f}%)" if b else "0/0"
 
@@ -134,7 +134,7 @@ def summarise(rows: list[dict], title: str, jobs: int = 1) -> str:
          f"- held-out error never worse than the nominal model's: "
          f"**{pct(sum(r.get('never_worse') is True for r in rows), len(rows))}**",
          f"- named effects' parameters within 25% of the truth: **{pct(sum(r['params_within_25'] is True for r in named_rows), len(named_rows))}**",
-         f"- seconds per case ({os.cpu_count()} CPU cores, {jobs} case(s) at a time): median {np.median([r['seconds'] for r in rows]):.1f}, "
+         f"- seconds per case ({os.cpu_count()} CPU cores, {jobs} case(s) at a time, {devices} XLA CPU device(s) each): median {np.median([r['seconds'] for r in rows]):.1f}, "
          f"max {np.max([r['seconds'] for r in rows]):.1f}; 8 s recordings: median "
          f"{np.median([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}, max "
          f"{np.max([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}",
@@ -189,7 +189,12 @@ def main(args: Settings):
         # every look at a test list is kept: a second run names its own folder
         raise SystemExit(f"{out} holds an earlier look at the {args.split} list; give this one a tag= "
                          f"(e.g. tag=_third_look)")
-    print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(listed)})", flush=True)
+    # each case's simulations over its share of the cores, as the diagnose command does (before JAX starts)
+    from sim2real import _xla_cpu
+
+    devices = _xla_cpu.split_cores(max(1, (os.cpu_count() or 1) // args.jobs)) or 1
+    print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(listed)}), {args.jobs} at a time, "
+          f"{devices} CPU device(s) each", flush=True)
     os.makedirs(args.work, exist_ok=True)
     os.makedirs(out, exist_ok=True)
     rows = []
@@ -212,7 +217,7 @@ def main(args: Settings):
         w.writeheader()
         w.writerows(rows)
     text = summarise(rows, f"{args.split} split ({len(rows)} cases{', only ' + args.only if args.only else ''})",
-                     args.jobs)
+                     args.jobs, devices)
     with open(os.path.join(out, "summary.md"), "w") as f:
         f.write(text)
     print(text)

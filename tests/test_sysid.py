@@ -266,11 +266,58 @@ def test_segments_start_the_command_path_from_the_recording(tmp_path):
     assert np.sqrt(np.mean(r[0] ** 2)) < 0.05 * np.sqrt(np.mean(r[1] ** 2))
     # the same segments simulated with the filter restarted from rest at each start are worse
     es0 = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (sh.S,) + x.shape), system.effects.init_state())
-    restarted = sh._predict_one(jnp.asarray(z), jnp.asarray(sh.v0, jnp.float32), jnp.asarray(tiles), sh._data, es0,
-                                jnp.zeros((sh.S, 0)))
-    e_restart = np.asarray(restarted["qpos"]) - sh.signals["qpos"][tiles]
+    restarted = sh._segments(jnp.asarray(z)[None], jnp.asarray(sh.v0, jnp.float32)[None], jnp.asarray(tiles), sh._data,
+                             jax.tree_util.tree_map(lambda x: x[None], es0), jnp.zeros((1, sh.S, 0)))
+    e_restart = np.asarray(restarted["qpos"][0]) - sh.signals["qpos"][tiles]
     e_pass1 = sh.predict(z[None], sh.v0[None], tiles)["qpos"][0] - sh.signals["qpos"][tiles]
     assert np.sqrt(np.mean(e_pass1 ** 2)) < 0.5 * np.sqrt(np.mean(e_restart ** 2))
+
+
+_PREDICT = """
+import sys
+import numpy as np
+from sim2real import _xla_cpu
+devices = _xla_cpu.split_cores(int(sys.argv[3]))
+import jax
+from sim2real.envs.base import ASSETS
+import mujoco, os
+from sim2real.sysid.recordings import load
+from sim2real.sysid.shooting import Shooting
+from sim2real.sysid.system import System
+from sim2real.sysid.trajectory import from_recording
+model = os.path.join(ASSETS, "pendulum.xml")
+rec = load(sys.argv[1], mujoco.MjModel.from_xml_path(model))
+system = System(model, dt=rec.dt)
+sh = Shooting(system, [from_recording(rec, system)], 20, val_fraction=0.3)
+z = np.stack([system.spec.default, system.spec.vector({"motor_lag:motor": 0.1})])
+out = sh.predict(z, np.repeat(sh.v0[None], 2, 0), sh.tiles.of("fit"))
+np.savez(sys.argv[2], devices=len(jax.devices()), **out)
+"""
+
+
+def test_predictions_split_over_two_cpu_devices_are_the_ones_of_one(tmp_path):
+    """The diagnose command asks XLA for one CPU device per core (``_xla_cpu.split_cores``) and
+    ``Shooting`` then splits its physics vectors over them: the predictions are those of a single
+    device (two fresh processes, as the split must be asked for before JAX starts)."""
+    import subprocess
+    import sys
+
+    case = Case("pendulum", "motor_lag", "motor", (("motor_lag:motor", 0.1),), noise=0.0, seed=3)
+    path = str(tmp_path / "lag.csv")
+    record(case, path)
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    res = {}
+    for n in (1, 2):
+        out = str(tmp_path / f"pred{n}.npz")
+        p = subprocess.run([sys.executable, "-c", _PREDICT, path, out, str(n)], env=env, cwd=ROOT,
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr[-2000:]
+        res[n] = dict(np.load(out))
+    assert res[1]["devices"] == 1 and res[2]["devices"] == 2
+    assert res[1]["qpos"].shape == res[2]["qpos"].shape == (2, len(res[1]["ok"][0])) + res[1]["qpos"].shape[2:]
+    assert not np.allclose(res[1]["qpos"][0], res[1]["qpos"][1])   # two different physics
+    for key in ("qpos", "qvel", "force"):
+        np.testing.assert_allclose(res[2][key], res[1][key], rtol=1e-5, atol=1e-6)
 
 
 def test_a_measured_velocity_noisier_than_the_motion_is_not_compared(tmp_path):

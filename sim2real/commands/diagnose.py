@@ -53,6 +53,9 @@ HELP = ('sim2real.sysid.diagnose:DiagnoseConfig',)  # the typed configs whose ke
 
 def run(argv=None):
     """Console entry point ``sim2real-diagnose`` (and ``python -m sim2real diagnose``)."""
+    from sim2real import _xla_cpu
+
+    _xla_cpu.split_cores()  # its simulations on every core (before JAX starts)
     main_guard(main, sys.argv[1:] if argv is None else argv, doc=__doc__, configs=HELP)
 
 

@@ -175,12 +175,30 @@ class Shooting:
             flat[p] = r * smax + np.arange(len(p))
         self._data["order"] = jnp.asarray(order, jnp.int32)
         self._data["flat"] = jnp.asarray(flat, jnp.int32)
-        self._fn = jax.jit(self._predict_batch)
+        self._fn, self._data = self._over_devices(self._predict_batch, self._data)
         self.calls = 0
         self.seconds = 0.0
         self.S = S
 
     # ------------------------------------------------------------------------------------------
+    def _over_devices(self, fn, data):
+        """``fn`` jitted, its physics split over this process's devices where there are several.
+
+        One XLA CPU device runs one program at a time on about one core, so a diagnosis used one
+        core of many. Where JAX was started with several CPU devices (the diagnose command asks
+        for one per core: ``sim2real._xla_cpu``), each takes ``B / D`` of the physics vectors
+        (one program, compiled once); the recordings are copied to every device once, here.
+        """
+        devs = jax.local_devices()
+        D = len(devs)
+        if D < 2 or self.B % D:
+            return jax.jit(fn), data
+        mesh = jax.sharding.Mesh(np.array(devs), ("physics",))
+        P = jax.sharding.PartitionSpec
+        split = jax.shard_map(fn, mesh=mesh, in_specs=(P("physics"), P("physics"), P(), P()),
+                              out_specs=P("physics"), check_vma=False)
+        return jax.jit(split), jax.device_put(data, jax.sharding.NamedSharding(mesh, P()))
+
     def _initial_activation(self, tr) -> np.ndarray:
         m = self.sys.mj
         act, length = np.zeros(m.na), None
@@ -301,10 +319,15 @@ class Shooting:
 
         def rest(_):  # no delay, lag or backlash anywhere: the state is the command itself (no memory)
             es = jax.vmap(lambda s: fx.steady_state(data["ctrl"][data["start"][s]]))(jnp.arange(self.S))
-            es = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (self.B,) + x.shape), es)
-            return es, jnp.zeros((self.B, self.S, sys.mj.na))
+            es = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (zs.shape[0],) + x.shape), es)
+            return es, jnp.zeros((zs.shape[0], self.S, sys.mj.na))
 
         es_all, act_all = jax.lax.cond(needed, run, rest, None)
+        return self._segments(zs, v0, tiles, data, es_all, act_all)
+
+    def _segments(self, zs, v0, tiles, data, es_all, act_all):
+        """Segments ``tiles [k]`` under physics ``zs [B, P]`` from velocities ``v0 [B, S, nv]`` and
+        command-path states ``es_all`` / ``act_all`` (``[B, S, ...]``); arrays ``[B, k, H, .]``."""
         # One vmap over every (physics, segment) pair, each with its own copy of the template data,
         # costs a third of the tracing of a vmap over physics around a vmap over segments: JAX
         # batches a scan's body once per vmap level, and again each time a carry that entered
@@ -313,7 +336,7 @@ class Shooting:
         B, k = zs.shape[0], tiles.shape[0]
         flat = lambda x: x.reshape((B * k,) + x.shape[2:])  # noqa: E731
         pairs = lambda x: flat(jnp.broadcast_to(x[None], (B,) + x.shape))  # noqa: E731  (same for every physics)
-        d0 = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (B * k,) + x.shape), sys.data0)
+        d0 = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (B * k,) + x.shape), self.sys.data0)
         out = jax.vmap(lambda z, q0, v, es, act, s, d: self._segment(z, data, q0, v, es, act, s, d))(
             flat(jnp.broadcast_to(zs[:, None], (B, k) + zs.shape[1:])), pairs(data["q0"][tiles]),
             flat(v0[:, tiles]), jax.tree_util.tree_map(lambda x: flat(x[:, tiles]), es_all),
