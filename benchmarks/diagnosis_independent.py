@@ -190,9 +190,9 @@ def main(args: Settings):
         raise SystemExit(f"{out} holds an earlier look at the {args.split} list; give this one a tag= "
                          f"(e.g. tag=_third_look)")
     # each case's simulations over its share of the cores, as the diagnose command does (before JAX starts)
-    from sim2real import _xla_cpu
+    from sim2real.envs import parallel
 
-    devices = _xla_cpu.split_cores(max(1, (os.cpu_count() or 1) // args.jobs)) or 1
+    devices = parallel.use_cpu_cores(max(1, (os.cpu_count() or 1) // args.jobs))
     print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(listed)}), {args.jobs} at a time, "
           f"{devices} CPU device(s) each", flush=True)
     os.makedirs(args.work, exist_ok=True)

@@ -177,21 +177,3 @@ def test_xla_cpu_flag_is_set_only_where_safe(monkeypatch):
                        env={**os.environ, "XLA_FLAGS": f"{_xla_cpu.FLAG}=true"})
     assert r.stdout.strip() == f"{_xla_cpu.FLAG}=true", r.stderr
 
-
-def test_cores_are_split_into_cpu_devices_only_before_jax_starts_and_never_over_the_users_count(monkeypatch):
-    """``split_cores`` (the diagnose command's): a power of two of devices, at most 8, one per core;
-    nothing once JAX has started or where the user chose a count."""
-    import jax
-
-    from sim2real import _xla_cpu
-
-    jax.numpy.zeros(1).block_until_ready()
-    monkeypatch.setenv("XLA_FLAGS", "")
-    assert _xla_cpu.split_cores(6) == 0 and os.environ["XLA_FLAGS"] == ""   # JAX is up: too late
-    monkeypatch.setattr(_xla_cpu, "_started", lambda: False)                 # as in a fresh process
-    for cores, want in ((1, 1), (2, 2), (3, 2), (6, 4), (64, 8)):
-        monkeypatch.setenv("XLA_FLAGS", "--other=1")
-        assert _xla_cpu.split_cores(cores) == want
-        assert os.environ["XLA_FLAGS"] == ("--other=1" + (f" {_xla_cpu.DEVICES}={want}" if want > 1 else ""))
-    monkeypatch.setenv("XLA_FLAGS", f"{_xla_cpu.DEVICES}=3")
-    assert _xla_cpu.split_cores(8) == 0 and os.environ["XLA_FLAGS"] == f"{_xla_cpu.DEVICES}=3"

@@ -276,8 +276,8 @@ def test_segments_start_the_command_path_from_the_recording(tmp_path):
 _PREDICT = """
 import sys
 import numpy as np
-from sim2real import _xla_cpu
-devices = _xla_cpu.split_cores(int(sys.argv[3]))
+from sim2real.envs import parallel
+parallel.use_cpu_cores(int(sys.argv[3]))
 import jax
 from sim2real.envs.base import ASSETS
 import mujoco, os
@@ -296,9 +296,9 @@ np.savez(sys.argv[2], devices=len(jax.devices()), **out)
 
 
 def test_predictions_split_over_two_cpu_devices_are_the_ones_of_one(tmp_path):
-    """The diagnose command asks XLA for one CPU device per core (``_xla_cpu.split_cores``) and
+    """The diagnose command asks for one CPU device per core (``envs.parallel.use_cpu_cores``) and
     ``Shooting`` then splits its physics vectors over them: the predictions are those of a single
-    device (two fresh processes, as the split must be asked for before JAX starts)."""
+    device (two fresh processes: the device count is fixed when JAX starts)."""
     import subprocess
     import sys
 

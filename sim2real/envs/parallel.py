@@ -70,12 +70,16 @@ def avoid_shardy_crash(devices=None) -> bool:
     Why: XLA in JAX 0.11.2 (CUDA) segfaults while compiling any ``jax.shard_map`` whose body runs an
     MJX step over 2 GPUs when Shardy partitions it -- a contact-free pendulum's single step too --
     and compiles and runs the same program with GSPMD (``benchmarks/xla_multigpu_repro.py``;
-    ``benchmarks/results/multi_gpu/README.md``). The setting is part of jit's cache key, so it is
-    made before anything is traced (PPO's constructor, ``batch_map``, the training driver call
-    this); CPU devices keep Shardy. Returns whether GSPMD is now in use.
+    ``benchmarks/results/multi_gpu/README.md``). JAX 0.11.2's XLA does the same over several CPU
+    devices (the diagnosis's segments split over 2: a segfault with Shardy; GSPMD gives the
+    one-device numbers to 1e-6; ``tests/test_sysid.py``'s two-device case, run on the device
+    machine's CPUs on 2026-11-28). The setting is part of jit's cache key, so it is made before
+    anything is traced (PPO's constructor, ``batch_map``, the training driver call this); CPU
+    devices keep Shardy on the JAX 0.9 that CI runs. Returns whether GSPMD is now in use.
     """
     devices = jax.devices() if devices is None else devices
-    if len(devices) > 1 and devices[0].platform == "gpu" and jax.config.jax_use_shardy_partitioner:
+    crashes = devices[0].platform == "gpu" or tuple(int(p) for p in jax.__version__.split(".")[:2]) >= (0, 11)
+    if len(devices) > 1 and crashes and jax.config.jax_use_shardy_partitioner:
         jax.config.update("jax_use_shardy_partitioner", False)
     return not jax.config.jax_use_shardy_partitioner
 

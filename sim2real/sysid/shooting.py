@@ -25,6 +25,9 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
+from jax.sharding import PartitionSpec as P
+
+from sim2real.envs import parallel
 from sim2real.physics import stepper
 from sim2real.physics.params import clip
 from sim2real.sysid.derivatives import velocity_state
@@ -182,22 +185,14 @@ class Shooting:
 
     # ------------------------------------------------------------------------------------------
     def _over_devices(self, fn, data):
-        """``fn`` jitted, its physics split over this process's devices where there are several.
-
-        One XLA CPU device runs one program at a time on about one core, so a diagnosis used one
-        core of many. Where JAX was started with several CPU devices (the diagnose command asks
-        for one per core: ``sim2real._xla_cpu``), each takes ``B / D`` of the physics vectors
-        (one program, compiled once); the recordings are copied to every device once, here.
-        """
-        devs = jax.local_devices()
-        D = len(devs)
-        if D < 2 or self.B % D:
+        """``fn`` jitted, its physics vectors split over this process's devices where several divide
+        ``B`` (``envs.parallel``: the diagnose command asks for one CPU device per core, as XLA runs
+        one device's program on about one core); the recordings are copied to every device once."""
+        mapped = parallel.env_slices(fn, self.B, in_specs=(parallel.ENVS, parallel.ENVS, P(), P()))
+        if mapped is fn:
             return jax.jit(fn), data
-        mesh = jax.sharding.Mesh(np.array(devs), ("physics",))
-        P = jax.sharding.PartitionSpec
-        split = jax.shard_map(fn, mesh=mesh, in_specs=(P("physics"), P("physics"), P(), P()),
-                              out_specs=P("physics"), check_vma=False)
-        return jax.jit(split), jax.device_put(data, jax.sharding.NamedSharding(mesh, P()))
+        mesh = parallel.batch_sharding(self.B).mesh
+        return jax.jit(mapped), jax.device_put(data, jax.sharding.NamedSharding(mesh, P()))
 
     def _initial_activation(self, tr) -> np.ndarray:
         m = self.sys.mj
