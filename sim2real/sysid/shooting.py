@@ -24,7 +24,6 @@ import jax
 import jax.numpy as jnp
 import mujoco
 import numpy as np
-
 from jax.sharding import PartitionSpec as P
 
 from sim2real.envs import parallel
@@ -272,7 +271,7 @@ class Shooting:
 
     def _segment(self, z, data, q0, v0, es, act, s, d0):
         """One segment of ``H`` samples under physics ``z [P]`` from positions ``q0 [nq]`` and velocities
-        ``v0 [nv]``; ``d0`` is this segment's own copy of the template data (see ``_predict_batch``)."""
+        ``v0 [nv]``; ``d0`` is this segment's own copy of the template data (``_segments`` says why)."""
         sys = self.sys
         fx = sys.effects
         model = sys.physics.apply(z)
@@ -295,7 +294,7 @@ class Shooting:
             out = {"qpos": fx.measure(z, d2.qpos), "qvel": d2.qvel, "force": d2.actuator_force, "ok": ok}
             return (d2, es2, ok), out
 
-        alive = jnp.isfinite(q0).all()   # (computed from the segment's data: batched, see above)
+        alive = jnp.isfinite(q0).all()   # (from the segment's own data, so batched from the start too)
         return jax.lax.scan(step, (d, es, alive), (u, f))[1]
 
     def _predict_batch(self, zs, v0, tiles, data):
@@ -327,7 +326,8 @@ class Shooting:
         # costs a third of the tracing of a vmap over physics around a vmap over segments: JAX
         # batches a scan's body once per vmap level, and again each time a carry that entered
         # unbatched (the shared template's fields) comes out batched, so MuJoCo's step was traced
-        # 4-6 times over (5.3 -> 1.8 s per compile on a 3-link arm). The numbers are the same.
+        # 4-6 times over (5.3 -> 1.8 s per compile on a 3-link arm). The numbers are the same to
+        # float rounding (the order of XLA's batched operations is not fixed).
         B, k = zs.shape[0], tiles.shape[0]
         flat = lambda x: x.reshape((B * k,) + x.shape[2:])  # noqa: E731
         pairs = lambda x: flat(jnp.broadcast_to(x[None], (B,) + x.shape))  # noqa: E731  (same for every physics)
