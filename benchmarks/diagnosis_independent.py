@@ -189,10 +189,13 @@ def main(args: Settings):
         # every look at a test list is kept: a second run names its own folder
         raise SystemExit(f"{out} holds an earlier look at the {args.split} list; give this one a tag= "
                          f"(e.g. tag=_third_look)")
-    # each case's simulations over its share of the cores, as the diagnose command does (before JAX starts)
-    from sim2real.envs import parallel
+    # each case's simulations over its share of the cores, as the diagnose command does. Only the
+    # setting: JAX must not start here, as the workers fork from this process (a forked JAX
+    # backend deadlocks); each starts its own with that many CPU devices.
+    import jax
 
-    devices = parallel.use_cpu_cores(max(1, (os.cpu_count() or 1) // args.jobs))
+    devices = max(1, (os.cpu_count() or 1) // args.jobs)
+    jax.config.update("jax_num_cpu_devices", devices)
     print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(listed)}), {args.jobs} at a time, "
           f"{devices} CPU device(s) each", flush=True)
     os.makedirs(args.work, exist_ok=True)
