@@ -54,9 +54,10 @@ HELP = ('sim2real.sysid.diagnose:DiagnoseConfig',)  # the typed configs whose ke
 def run(argv=None):
     """Console entry point ``sim2real-diagnose`` (and ``python -m sim2real diagnose``)."""
     from sim2real.envs import parallel
+    from sim2real.sysid import shooting
 
-    try:  # sysid.shooting's 8 physics vectors per call split over the cores (only before JAX starts)
-        parallel.use_cpu_cores(min(os.cpu_count() or 1, 8))
+    try:  # sysid.shooting's physics vectors per call split over the cores (only before JAX starts)
+        parallel.use_cpu_cores(min(os.cpu_count() or 1, shooting.B))
     except RuntimeError:
         pass
     main_guard(main, sys.argv[1:] if argv is None else argv, doc=__doc__, configs=HELP)
