@@ -488,8 +488,8 @@ def build_cases(extra: bool = False, fresh: bool = False) -> list[Case]:
 
 def focus_cases() -> list[Case]:
     """The focus list: a single backlash or payload on every target that can have one (not a
-    backlash on an integrating servo, which the diagnosis does not model), a pair of cases each
-    (two of the three magnitudes, two designs). Deterministic."""
+    backlash on an integrating servo, which the diagnosis did not model when the list was made),
+    a pair of cases each (two of the three magnitudes, two designs). Deterministic."""
     S = systems()
     rng = np.random.default_rng(20261127)
     cases: list[Case] = []
@@ -507,7 +507,7 @@ def focus_cases() -> list[Case]:
 def pair_cases() -> list[Case]:
     """The pairs list (seeds 3500 and up, split ``pairs``), a fourth tuning list made on
     2026-11-28 when the fresh test list showed backlash pairs named least: on every actuator that
-    can have a modelled backlash, the backlash and a Coulomb friction on its own joint (a gearbox
+    could have a modelled backlash then (not an integrating servo), the backlash and a Coulomb friction on its own joint (a gearbox
     has both), twice each (magnitudes 1 + 2 and 2 + 1, as the pairs of ``build_cases``).
     Deterministic."""
     S = systems()

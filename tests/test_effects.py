@@ -178,7 +178,7 @@ def test_a_backlash_motor_side_moves_with_its_joints_corrected_velocity():
     env = env_for("arm2")
     fx = env.effects
     es = fx.init_state()
-    es["backlash"] = (jnp.array([0.01, -0.02]), jnp.array([1.0, -2.0]))
+    es["backlash"] = (jnp.array([0.01, -0.02]), jnp.array([1.0, -2.0])) + tuple(es["backlash"][2:])
     dv = jnp.array([0.3, -0.5])  # shoulder, elbow: each motor drives its own joint
     out = fx.rebase(es, dv)
     np.testing.assert_allclose(out["backlash"][1], [1.3, -2.5], rtol=1e-6)
@@ -275,7 +275,8 @@ def test_backlash_motor_side_crosses_the_band_then_drives_the_joint():
     data = {"rows": np.array([0]), "inertia_rows": np.array([1]), "stiffness_rows": np.array([2]),
             "inertia": np.array([1e-3]), "gain_rows": np.array([-1]), "gain": np.array([1.0]),
             "k_per_gain": np.array([0.0]), "damp": np.array([0.0]), "qpos": np.array([0]), "dof": np.array([0]),
-            "ctrl_lo": np.array([-np.inf]), "ctrl_hi": np.array([np.inf])}
+            "ctrl_lo": np.array([-np.inf]), "ctrl_hi": np.array([np.inf]), "integ": np.array([False]),
+            "actadr": np.array([0]), "act_lo": np.array([-np.inf]), "act_hi": np.array([np.inf]), "gear": np.array([1.0])}
     I, J, tau, h = 0.01, 1e-3, 0.1, 1e-4
 
     def run(k, steps):

@@ -583,10 +583,10 @@ def test_bundled_real_recordings_load_against_their_models(folder, model):
     assert len(recs) >= 2
 
 
-def test_backlash_is_not_searched_on_an_integrating_servo(tmp_path):
-    """An ``intvelocity`` servo integrates its command: the backlash stage's force, passed as a
-    command, would be integrated as a velocity. No backlash candidate is made for it (a note
-    says so); the motor beside it still gets one."""
+def test_backlash_is_searched_on_an_integrating_servo_too(tmp_path):
+    """An ``intvelocity`` servo integrates its command; the backlash stage then holds the setpoint
+    itself (``kinds/backlash.py``). A backlash candidate is made for it as for the motor beside it,
+    and its width can be set."""
     from sim2real.sysid.candidates import Scales, library
     from sim2real.sysid.system import System
 
@@ -600,9 +600,69 @@ def test_backlash_is_not_searched_on_an_integrating_servo(tmp_path):
     sc = Scales(force=np.ones(2), speed=np.ones(2), range=np.ones(2), act_force=np.ones(2), dt=0.01, max_delay=8,
                 inertia=np.full(2, 0.01))
     backlash = [c.target for c in library(system, sc, ("backlash",))]
-    assert backlash == ["m2"]
-    assert any("backlash not searched on iv" in n for n in system.notes)
-    # nor can one be set or randomised there: the bounds rule refuses it, saying why
-    assert system.spec["backlash:iv"].high == 0.0 and system.spec["backlash:m2"].high > 0.0
-    with pytest.raises(ValueError, match="outside its physical bounds.*integrating servo"):
-        system.spec.check_value("backlash:iv", 0.01)
+    assert backlash == ["iv", "m2"]
+    assert not any("backlash not searched" in n for n in system.notes)
+    system.spec.check_value("backlash:iv", 0.01)
+
+
+def test_backlash_on_an_integrating_servo_is_a_rotor_behind_a_dead_band(tmp_path):
+    """Against an independent plant: native MuJoCo, the ``intvelocity`` servo driving a rotor
+    (armature 1e-3 kg m^2) that meets the pendulum through a 0.05 rad dead band and a 40 Nm/rad
+    mesh (damping ratio 0.5), written here with ``qfrc_applied``. The stage with the same band,
+    inertia and stiffness follows it to a few percent of what the band changes; with the band
+    at 0 it is MuJoCo's own servo on the bare pendulum."""
+    from sim2real.physics import stepper
+    from sim2real.sysid.system import System
+
+    h, J, k, b, T = 0.0005, 1e-3, 40.0, 0.05, 2000
+    c = 2 * 0.5 * np.sqrt(k * J)
+    servo = '<intvelocity name="iv" joint="JOINT" kp="6" kv="0.1" ctrllimited="true" ctrlrange="-3 3" actrange="-10 10"/>'
+    pole = '<body name="pole"><joint name="pivot" type="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/></body>'
+    rotor = (f'<body name="rotor"><joint name="rot" type="hinge" axis="0 1 0" armature="{J}"/>'
+             '<inertial pos="0 0 0" mass="1e-4" diaginertia="1e-9 1e-9 1e-9"/></body>')
+    head = f'<mujoco><option timestep="{h}" integrator="implicitfast"/><worldbody>'
+    nominal = head + pole + "</worldbody><actuator>" + servo.replace("JOINT", "pivot") + "</actuator></mujoco>"
+    truth = head + rotor + pole + "</worldbody><actuator>" + servo.replace("JOINT", "rot") + "</actuator></mujoco>"
+    t = np.arange(T) * h
+    ctrl = 2.0 * np.sin(2 * np.pi * 1.5 * t) * np.sign(np.sin(2 * np.pi * 0.8 * t + 0.1))
+
+    def native(xml, band):
+        m = mujoco.MjModel.from_xml_string(xml)
+        d = mujoco.MjData(m)
+        d.qpos[:] = 0.2
+        d.act[0] = 0.2
+        out = []
+        for u in ctrl:
+            d.ctrl[0] = u
+            if m.nq == 2:  # the mesh: rotor (0) against pole (1) beyond the band
+                gap = d.qpos[0] - d.qpos[1]
+                tq = k * np.sign(gap) * max(abs(gap) - band / 2, 0) + (c * (d.qvel[0] - d.qvel[1]) if abs(gap) > band / 2 else 0)
+                d.qfrc_applied[:] = [-tq, tq]
+            out.append(d.qpos[-1])
+            mujoco.mj_step(m, d)
+        return np.array(out)
+
+    (tmp_path / "nominal.xml").write_text(nominal)
+    system = System(str(tmp_path / "nominal.xml"), dt=h)
+    names = [p.name for p in system.spec.params]
+
+    def stage(band):
+        z = np.array([p.default for p in system.spec.params], np.float32)
+        for name, v in (("backlash:iv", band), ("backlash_inertia:iv", J), ("backlash_stiffness:iv", k)):
+            z[names.index(name)] = v
+        z = jnp.asarray(z)
+        model = system.physics.apply(z)
+
+        def step(carry, u):
+            d, es = carry
+            d2, es = stepper.advance(system.effects, model, z, d, es, u[None], h, 1)
+            return (d2, es), d.qpos[0]
+
+        d0 = system.data0.replace(qpos=jnp.full(1, 0.2), act=jnp.full(1, 0.2))
+        return np.asarray(jax.lax.scan(step, (d0, system.effects.init_state()), jnp.asarray(ctrl, jnp.float32))[1])
+
+    rms = lambda a, b: float(np.sqrt(np.mean((a - b) ** 2)))  # noqa: E731
+    with_band, bare = native(truth, b), native(nominal, 0.0)
+    assert rms(with_band, bare) > 0.01                          # the band matters here
+    assert rms(stage(b), with_band) < 0.1 * rms(with_band, bare)
+    np.testing.assert_allclose(stage(0.0), bare, atol=1e-5)

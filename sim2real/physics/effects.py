@@ -68,6 +68,8 @@ class Effects:
         self._command = [(k, k.owns[0], d) for k in stages if (d := k.command_setup(m, spec, cfg)) is not None]
         # rows of z that switch a stage on (its memory matters only then: sysid.shooting)
         self.command_rows = np.array([r for k, _, d in self._command for r in k.command_rows(d)], np.int32)
+        # stages that set an activation themselves (``activation``): callers then write it into MJX's data
+        self.sets_act = any(k.sets_act(d) for k, _, d in self._command)
         # velocity-dependent forces as damping: (plug-in, its dofs, its static data) per kind
         self._damping = [(k, *ds) for k in kinds.all_kinds() if (ds := k.damping_setup(m, spec, cfg)) is not None]
         self.damping_dofs = (np.concatenate([d for _, d, _ in self._damping]).astype(np.int32) if self._damping
@@ -97,7 +99,7 @@ class Effects:
         out.update({name: k.push(d, es[name], ctrl) for k, name, d in self._command})
         return out
 
-    def actuate(self, z, es: EffectState, j, n: int, qpos, h: float, qvel=None):
+    def actuate(self, z, es: EffectState, j, n: int, qpos, h: float, qvel=None, act=None):
         """The command path for physics sub-step ``j`` of ``n``: each stage in turn (delay -> motor
         lag -> backlash).
 
@@ -108,13 +110,24 @@ class Effects:
           qpos, qvel: ``[nq]``, ``[nv]`` current joint positions and velocities (true; the
             backlash stage moves its dead band with the joint).
           h: physics sub-step in seconds.
+          act: ``[na]`` current activations (the backlash's integrating servo starts from them).
         Returns:
-          ``(ctrl_applied [nu], new effect state)``.
+          ``(ctrl_applied [nu], new effect state)``; where ``sets_act``, the activations for the
+          sub-step are ``activation(new effect state, act)``.
         """
         u, out = es["ctrl"], dict(es)
         for k, name, d in self._command:
-            u, out[name] = k.command(d, z, es[name], u, j, n, qpos, h, qvel)
+            # (the activations only to a stage that sets them: a plug-in written before it keeps working)
+            kw = {"act": act} if k.sets_act(d) else {}
+            u, out[name] = k.command(d, z, es[name], u, j, n, qpos, h, qvel, **kw)
         return u, out
+
+    def activation(self, es: EffectState, act):
+        """``act [na]`` as the command path sets it for the coming sub-step (``Kind.activation``:
+        a backlash in front of an integrating servo holds the servo's setpoint itself)."""
+        for k, name, d in self._command:
+            act = k.activation(d, es[name], act)
+        return act
 
     def rebase(self, es: EffectState, dv) -> EffectState:
         """The command path's state when the joint velocities it was run with change by ``dv

@@ -49,11 +49,12 @@ class Backlash(Kind):
     impact, ``J`` small against the joint's own inertia) and the two then move together, the
     actuator's force reaching the joint, until it pulls away from the edge. The motor side is
     integrated implicitly (a stiff servo on a light rotor stays stable at any sub-step). Actuators
-    with activation dynamics pass the command through their filter after this stage: a fast
-    filter delays the band's force a little; an integrator (``intvelocity``) would integrate it
-    as a velocity, and its law acts on the integrated setpoint, not on the command this stage
-    sees -- not modelled: the width's bounds there are [0, 0] (``declared``), and the
-    diagnosis does not search a backlash there (``candidates``).
+    with a filter (``dyntype="filter"``) pass this stage's output through it: a fast filter
+    delays the band's force a little. An integrating servo (``intvelocity``: ``act' = u``, force
+    ``G act - K q - D qdot``) acts on the motor side through its setpoint, so there this stage
+    integrates the command itself (``s``, from the activation MuJoCo held when it started, within
+    ``actrange``), lets the law act on ``s``, and hands the joint its force by setting the
+    activation (``activation``; MuJoCo's own integration of ``u`` is overwritten each sub-step).
 
     MuJoCo clamps every command to its ``ctrlrange`` after the command path. The motor's own
     command is limited so, but the command this stage computes to pass a mesh force or an
@@ -72,11 +73,7 @@ class Backlash(Kind):
     command_order = 30
 
     def declared(self, m, index, kind, entry):
-        # on an integrating servo, or on a tendon (no joint of its own), the band is not modelled
-        # (class docstring): only 0 is allowed
-        if kind == "backlash" and m.actuator_dyntype[index] == mujoco.mjtDyn.mjDYN_INTEGRATOR:
-            d, lo, hi, unit, doc = entry
-            return d, lo, d, unit, doc + " (0 on an integrating servo, where the band is not modelled)"
+        # on a tendon (no joint of its own) the band is not defined: only 0 is allowed
         if kind == "backlash" and actuator_joint(m, index) < 0:
             d, lo, hi, unit, doc = entry
             return d, lo, d, unit, doc + " (0 on a tendon's actuator, which has no joint of its own)"
@@ -104,7 +101,16 @@ class Backlash(Kind):
         D = np.where(affine, -gear**2 * m.actuator_biasprm[:, 2], 0.0) if m.nu else np.zeros(0)
         # the motor's command range: MuJoCo's clamp, which ``setup`` switches off in MJX
         lo, hi = ctrl_limits(m)
+        # integrating servos: the setpoint is this stage's (class docstring), in ``actrange``
+        integ = np.array([m.actuator_dyntype[a] == mujoco.mjtDyn.mjDYN_INTEGRATOR and actuator_joint(m, a) >= 0
+                          for a in acts], bool)
+        act_limited = np.array([bool(m.actuator_actlimited[a]) for a in acts], bool)
         return {
+            "integ": integ,
+            "actadr": np.array([max(m.actuator_actadr[a] + m.actuator_actnum[a] - 1, 0) for a in acts], np.int32),
+            "act_lo": np.where(act_limited, m.actuator_actrange[:, 0], -np.inf) if m.nu else np.zeros(0),
+            "act_hi": np.where(act_limited, m.actuator_actrange[:, 1], np.inf) if m.nu else np.zeros(0),
+            "gear": gear,
             "rows": r,
             # the motor side's inertia may be a parameter too (the diagnosis fits it); else the static guess
             "inertia_rows": rows(spec, "backlash_inertia", acts),
@@ -122,14 +128,24 @@ class Backlash(Kind):
         }
 
     def command_state(self, data, ctrl):
-        """``(gap [nu], w [nu])``: the motor side's position inside the band relative to its joint,
-        and its velocity (joint units; at rest, centred)."""
+        """``(gap, w, s, started, act_out, sets) [nu] each``: the motor side's position inside the
+        band relative to its joint and its velocity (joint units; at rest, centred); an integrating
+        servo's setpoint (actuator length), 1 once it has been taken from the activation, and the
+        activation this stage sets (where ``sets`` is 1)."""
         nu = len(data["rows"])
-        return jnp.zeros(nu), jnp.zeros(nu)
+        return (jnp.zeros(nu),) * 6
 
-    def command(self, data, z, state, u, j, n, qpos, h, qvel=None):
-        gap, w = state
+    def command(self, data, z, state, u, j, n, qpos, h, qvel=None, act=None):
+        gap, w, s, started, _, _ = state
         u = jnp.clip(u, data["ctrl_lo"], data["ctrl_hi"])  # the motor's command, limited as MuJoCo would
+        integ = data["integ"]
+        if integ.any():
+            # an integrating servo holds where it starts: its setpoint is MuJoCo's activation then
+            held = (act[data["actadr"]] if act is not None and act.shape[0] else data["gear"] * qpos[data["qpos"]])
+            s = jnp.where(started > 0, s, held)
+            x = jnp.where(integ, s, u)   # what the actuator's gain multiplies
+        else:
+            x = u
         b = take(z, data["rows"])
         half = 0.5 * b
         q = qpos[data["qpos"]]
@@ -147,7 +163,7 @@ class Backlash(Kind):
         def step(kk, cc, e):
             """The motor side after one implicit step with a mesh spring ``kk`` (damping ``cc``)
             pulling its gap towards ``e``; ``(gap, w)``."""
-            w1 = (J * w + h * (G * u - K * (q + gap - h * v) - kk * (gap - h * v - e) + cc * v)) / (
+            w1 = (J * w + h * (G * x - K * (q + gap - h * v) - kk * (gap - h * v - e) + cc * v)) / (
                 J + h * h * (K + kk) + h * (D + cc))
             return gap + h * (w1 - v), w1
 
@@ -155,13 +171,13 @@ class Backlash(Kind):
         g_free, w_free = step(0.0, 0.0, 0.0)
         # -- a rigid mesh: at an edge, the actuator pushing into it, the motor side moves with the joint
         edge = jnp.where(gap >= 0, half, -half)
-        push = G * u - K * (q + edge) - D * v
+        push = G * x - K * (q + edge) - D * v
         engaged = (jnp.abs(gap) >= half) & (push * jnp.sign(edge) > 0)
         hit = (g_free >= half) | (g_free <= -half)
         g_hit = jnp.clip(g_free, -half, half)
         impulse = J * (w_free - v) / h                    # the relative momentum, passed on in this sub-step
-        force_hit = impulse + G * u - K * (q + g_hit) - D * v
-        u_rigid = jnp.where(engaged, u - K * edge / G_safe,
+        force_hit = impulse + G * x - K * (q + g_hit) - D * v
+        u_rigid = jnp.where(engaged, x - K * edge / G_safe,
                             jnp.where(hit, ctrl_for(force_hit), ctrl_for(jnp.zeros_like(u))))
         gap_rigid = jnp.where(engaged, edge, jnp.where(hit, g_hit, g_free))
         w_rigid = jnp.where(engaged | hit, v, w_free)
@@ -180,25 +196,39 @@ class Backlash(Kind):
         gap_new = jnp.where(rigid, gap_rigid, gap_comp)
         w_new = jnp.where(rigid, w_rigid, w_comp)
         on = b > 0
-        return jnp.where(on, u_out, u), (jnp.where(on, gap_new, gap), jnp.where(on, w_new, w))
+        sets = on & integ
+        # the integrating servo's own integration (MuJoCo's, Euler then clamped), within its range
+        s_new = jnp.clip(s + h * u, data["act_lo"], data["act_hi"])
+        return jnp.where(on & ~integ, u_out, u), (
+            jnp.where(on, gap_new, gap), jnp.where(on, w_new, w), jnp.where(integ, s_new, s),
+            jnp.ones_like(started), jnp.where(sets, u_out, 0.0), sets.astype(u.dtype))
 
     def command_rows(self, data):
         return [int(r) for r in data["rows"] if r >= 0]
 
+    def sets_act(self, data) -> bool:
+        return bool(data["integ"].any())
+
+    def activation(self, data, state, act):
+        if not data["integ"].any():
+            return act
+        idx = np.where(data["integ"])[0]
+        adr = data["actadr"][idx]
+        act_out, sets = state[4][idx], state[5][idx]
+        return act.at[adr].set(jnp.where(sets > 0, act_out.astype(act.dtype), act[adr]))
+
     def rebase(self, data, state, dv):
         # the motor side's velocity was computed against the joint's (estimated) velocity: where
         # that estimate is corrected, the motor side it dragged along is corrected by as much
-        gap, w = state
-        return gap, w + dv[data["dof"]]
+        gap, w, *rest = state
+        return (gap, w + dv[data["dof"]], *rest)
 
     def candidates(self, system, sc, add, target) -> None:
         m = system.mj
         an = system.actuators[target]
         j = actuator_joint(m, target)
-        if system.spec[f"backlash:{an}"].high <= 0:  # (``declared``: an integrating servo, a tendon)
-            note = (f"backlash not searched on {an}: " + (
-                "it pulls a tendon, not a joint of its own" if j < 0 else
-                "its command is integrated (an intvelocity servo), which the dead band's model does not hold"))
+        if system.spec[f"backlash:{an}"].high <= 0:  # (``declared``: a tendon)
+            note = f"backlash not searched on {an}: it pulls a tendon, not a joint of its own"
             if note not in system.notes:
                 system.notes.append(note)
             return

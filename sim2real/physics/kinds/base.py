@@ -18,7 +18,8 @@ hook                who calls it
 ``command``         ``Effects.actuate``: a stage of the command path, in ``command_order``
                     (delay line 10 -> motor lag 20 -> backlash 30), with its own memory
                     (``command_state``; ``push`` once per control step; ``rebase`` where the
-                    joint velocities it ran with are corrected: ``sysid.shooting``)
+                    joint velocities it ran with are corrected: ``sysid.shooting``;
+                    ``activation`` where it sets an actuator's activation: ``Effects.activation``)
 ``sense``           ``Effects.sense`` / ``measure`` / ``unsense``: how a measured position is made
 ``export``          ``sysid.export``: the fitted value written into the user's ``MjSpec``
 ``candidates``      ``sysid.candidates.library``: the hypotheses the diagnosis searches
@@ -111,8 +112,20 @@ class Kind:
 
     def command(self, data, z, state, u, j, n: int, qpos, h: float, qvel=None):
         """``(u [nu], state)`` for physics sub-step ``j`` of ``n`` (``h`` seconds; ``qpos [nq]``,
-        ``qvel [nv]``: the true state at the sub-step's start)."""
+        ``qvel [nv]``: the true state at the sub-step's start; a stage whose ``sets_act`` is true
+        also gets ``act=`` ``[na]``)."""
         raise NotImplementedError
+
+    # A stage that must set an actuator's activation itself (a force that passes through an
+    # integrating servo: the backlash) keeps the value in its memory and writes it here, once per
+    # sub-step, after the command path has run.
+    def sets_act(self, data) -> bool:
+        """Whether ``activation`` changes anything on this model (static)."""
+        return False
+
+    def activation(self, data, state, act):
+        """``act [na]`` as this stage sets it for the coming sub-step (unchanged by default)."""
+        return act
 
     def command_rows(self, data) -> list[int]:
         """Rows of ``z`` whose value > 0 switches this stage on (its memory then matters)."""
