@@ -200,9 +200,8 @@ class PlaygroundEnv(Env):
         z = clip(self.spec, z)
         ctrl = jnp.clip(action, self.ctrl_low, self.ctrl_high)
         es = self.effects.push(state.effects, ctrl)
-        u, es = self.effects.actuate(z, es, 0, 1, state.data.qpos, self.dt, state.data.qvel, state.data.act)
-        d_in = state.data.replace(act=self.effects.activation(es, state.data.act)) if self.effects.sets_act else state.data
-        inner = mjx_env.State(d_in, state.inner_obs, state.reward, jnp.zeros(()),
+        u, es = self.effects.actuate(z, es, 0, 1, state.data.qpos, self.dt, state.data.qvel)
+        inner = mjx_env.State(state.data, state.inner_obs, state.reward, jnp.zeros(()),
                               {k: state.metrics[k] for k in self.metric_names}, state.info)
         s = self._task_on(self.physics.apply(z)).step(inner, u)
         d = s.data
