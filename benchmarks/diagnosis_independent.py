@@ -165,7 +165,7 @@ class Settings:
     kept; out: results root; tag: suffix of the results folder; jobs: processes; note: a line for the
     test-split log (why this look); diagnose: diagnosis settings other than the defaults
     (``diagnose.min_gain=0.01``; tuning runs only)."""
-    split: Literal["tuning", "test", "all", "extra", "focus", "pairs", "fresh"] = "tuning"
+    split: Literal["tuning", "test", "all", "extra", "focus", "pairs", "servo", "fresh"] = "tuning"
     only: str = ""
     work: str = os.path.join("runs", "sysid_cases")
     out: str = OUT
@@ -178,6 +178,7 @@ class Settings:
 def main(args: Settings):
     cases = [c for c in (sysid_cases.focus_cases() if args.split == "focus"
                          else sysid_cases.pair_cases() if args.split == "pairs"
+                         else sysid_cases.servo_cases() if args.split == "servo"
                          else sysid_cases.build_cases(extra=args.split == "extra", fresh=args.split == "fresh"))
              if (args.split == "all" or c.split == args.split) and args.only in c.label]
     listed = sysid_cases.build_cases(fresh=args.split == "fresh")

@@ -47,6 +47,7 @@ EXCITATIONS = ("multisine", "chirp", "prbs", "steps", "pd")
 EXTRA_SEED = 1000  # first seed of the extra (tuning) list: build_cases(extra=True)
 FOCUS_SEED = 3000  # first seed of the focus (tuning) list: focus_cases()
 PAIRS_SEED = 3500  # first seed of the backlash + friction (tuning) list: pair_cases()
+SERVO_SEED = 3700  # first seed of the integrating-servo backlash (tuning) list: servo_cases()
 FRESH_SEED = 4000  # first seed of the fresh test list: build_cases(fresh=True)
 
 
@@ -349,6 +350,8 @@ class Case:
     def split(self) -> str:
         if self.seed >= FRESH_SEED:
             return "fresh"
+        if self.seed >= SERVO_SEED:
+            return "servo"
         if self.seed >= PAIRS_SEED:
             return "pairs"
         if self.seed >= FOCUS_SEED:
@@ -521,6 +524,32 @@ def pair_cases() -> list[Case]:
             for mb, mf in ((1, 2), (2, 1)):
                 cases.append(_case(PAIRS_SEED + len(cases), S, name, "double",
                                    (("backlash", a.name, mb), ("coulomb_friction", a.joint, mf)), ()))
+    return cases
+
+
+def servo_cases() -> list[Case]:
+    """The servo list (seeds 3700 and up, split ``servo``), a fifth tuning list made on
+    2026-11-28 when a backlash in front of an integrating servo was first modelled: on every
+    ``intvelocity`` actuator, its backlash alone at each of the three magnitudes, the backlash and
+    a Coulomb friction on its joint (magnitudes 1 + 2 and 2 + 1), twice each by other designs,
+    and two parameter-only cases (a false band must not appear). Deterministic."""
+    S = systems()
+    cases: list[Case] = []
+    for name, sysm in S.items():
+        app = set(applicable(sysm))
+        for a in sysm.actuators:
+            if a.kind != "intvelocity" or ("backlash", a.name) not in app:
+                continue
+            for _ in range(2):
+                for mb in range(3):
+                    cases.append(_case(SERVO_SEED + len(cases), S, name, "single", (("backlash", a.name, mb),), ()))
+                if ("coulomb_friction", a.joint) in app:
+                    for mb, mf in ((1, 2), (2, 1)):
+                        cases.append(_case(SERVO_SEED + len(cases), S, name, "double",
+                                           (("backlash", a.name, mb), ("coulomb_friction", a.joint, mf)), ()))
+            for f in (0.8, 1.25):
+                link = sysm.links[0].name
+                cases.append(_case(SERVO_SEED + len(cases), S, name, "none", (), (("mass", link, f),)))
     return cases
 
 
