@@ -510,8 +510,9 @@ def focus_cases() -> list[Case]:
 def pair_cases() -> list[Case]:
     """The pairs list (seeds 3500 and up, split ``pairs``), a fourth tuning list made on
     2026-11-28 when the fresh test list showed backlash pairs named least: on every actuator that
-    could have a modelled backlash then (not an integrating servo), the backlash and a Coulomb friction on its own joint (a gearbox
-    has both), twice each (magnitudes 1 + 2 and 2 + 1, as the pairs of ``build_cases``).
+    could have a modelled backlash then (not an integrating servo), the backlash and a Coulomb
+    friction on its own joint (a gearbox has both), twice each (magnitudes 1 + 2 and 2 + 1, as
+    the pairs of ``build_cases``).
     Deterministic."""
     S = systems()
     cases: list[Case] = []
@@ -548,8 +549,7 @@ def servo_cases() -> list[Case]:
                         cases.append(_case(SERVO_SEED + len(cases), S, name, "double",
                                            (("backlash", a.name, mb), ("coulomb_friction", a.joint, mf)), ()))
             for f in (0.8, 1.25):
-                link = sysm.links[0].name
-                cases.append(_case(SERVO_SEED + len(cases), S, name, "none", (), (("mass", link, f),)))
+                cases.append(_case(SERVO_SEED + len(cases), S, name, "none", (), (("mass", sysm.links[0].name, f),)))
     return cases
 
 

@@ -68,8 +68,6 @@ class Effects:
         self._command = [(k, k.owns[0], d) for k in stages if (d := k.command_setup(m, spec, cfg)) is not None]
         # rows of z that switch a stage on (its memory matters only then: sysid.shooting)
         self.command_rows = np.array([r for k, _, d in self._command for r in k.command_rows(d)], np.int32)
-        # stages that set an activation themselves (``activation``): callers then write it into MJX's data
-        self.sets_act = any(k.sets_act(d) for k, _, d in self._command)
         # velocity-dependent forces as damping: (plug-in, its dofs, its static data) per kind
         self._damping = [(k, *ds) for k in kinds.all_kinds() if (ds := k.damping_setup(m, spec, cfg)) is not None]
         self.damping_dofs = (np.concatenate([d for _, d, _ in self._damping]).astype(np.int32) if self._damping
@@ -112,8 +110,8 @@ class Effects:
           h: physics sub-step in seconds.
           act: ``[na]`` current activations (the backlash's integrating servo starts from them).
         Returns:
-          ``(ctrl_applied [nu], new effect state)``; where ``sets_act``, the activations for the
-          sub-step are ``activation(new effect state, act)``.
+          ``(ctrl_applied [nu], new effect state)``; the activations for the sub-step are
+          ``activation(new effect state, act)``.
         """
         u, out = es["ctrl"], dict(es)
         for k, name, d in self._command:
@@ -124,7 +122,8 @@ class Effects:
 
     def activation(self, es: EffectState, act):
         """``act [na]`` as the command path sets it for the coming sub-step (``Kind.activation``:
-        a backlash in front of an integrating servo holds the servo's setpoint itself)."""
+        a backlash in front of an integrating servo holds the servo's setpoint itself; ``act``
+        unchanged where no stage sets one)."""
         for k, name, d in self._command:
             act = k.activation(d, es[name], act)
         return act

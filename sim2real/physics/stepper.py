@@ -37,7 +37,7 @@ def advance(effects: Effects, model: mjx.Model, z, data: mjx.Data, es: EffectSta
     def substep(carry, j):
         d, es = carry
         u, es = effects.actuate(z, es, j, substeps, d.qpos, h, d.qvel, d.act)
-        d = d.replace(ctrl=u, act=effects.activation(es, d.act)) if effects.sets_act else d.replace(ctrl=u)
+        d = d.replace(ctrl=u, act=effects.activation(es, d.act))
         dofs, extra = effects.velocity_damping(z, d.qvel)
         m = model.replace(dof_damping=model.dof_damping.at[dofs].add(extra)) if dofs.size else model
         return (mjx.step(m, d), es), None

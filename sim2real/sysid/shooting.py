@@ -259,9 +259,7 @@ class Shooting:
                 def sub(c2, j):
                     es, act = c2
                     u, es = fx.actuate(z, es, j, n, qt, h, vt, act)
-                    if fx.sets_act:
-                        act = fx.activation(es, act)
-                    return (es, self._act_step(act, u, h)), None
+                    return (es, self._act_step(fx.activation(es, act), u, h)), None
 
                 return jax.lax.scan(sub, (es, act), jnp.arange(n))[0], None
 

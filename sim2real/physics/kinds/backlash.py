@@ -210,7 +210,7 @@ class Backlash(Kind):
         return bool(data["integ"].any())
 
     def activation(self, data, state, act):
-        if not data["integ"].any():
+        if not self.sets_act(data):
             return act
         idx = np.where(data["integ"])[0]
         adr = data["actadr"][idx]
