@@ -176,11 +176,7 @@ class Settings:
 
 
 def main(args: Settings):
-    cases = [c for c in (sysid_cases.focus_cases() if args.split == "focus"
-                         else sysid_cases.pair_cases() if args.split == "pairs"
-                         else sysid_cases.servo_cases() if args.split == "servo"
-                         else sysid_cases.build_cases(extra=args.split == "extra", fresh=args.split == "fresh"))
-             if (args.split == "all" or c.split == args.split) and args.only in c.label]
+    cases = [c for c in sysid_cases.split_cases(args.split) if args.only in c.label]
     listed = sysid_cases.build_cases(fresh=args.split == "fresh")
     out = os.path.join(args.out, args.split + args.tag)
     options = dict(args.diagnose)

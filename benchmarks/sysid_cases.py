@@ -555,6 +555,15 @@ def servo_cases() -> list[Case]:
 
 # ------------------------------------------------------------------------------------------------
 # simulation of the truth
+def split_cases(split: str) -> list[Case]:
+    """The cases of one list by its name (``tuning``, ``test``, ``extra``, ``focus``, ``pairs``,
+    ``servo``, ``fresh``; ``all``: the first list, both halves)."""
+    made = {"focus": focus_cases, "pairs": pair_cases, "servo": servo_cases,
+            "extra": lambda: build_cases(extra=True), "fresh": lambda: build_cases(fresh=True)}
+    cases = made.get(split, build_cases)()
+    return [c for c in cases if split == "all" or c.split == split]
+
+
 MAGNITUDES = {  # relative levels 0, 1, 2 of each effect (scaled per system in ``_truth``)
     "coulomb_friction": (0.05, 0.1, 0.2),        # x the joint's RMS generalised force
     "viscous_damping": (0.1, 0.2, 0.4),          # force at RMS speed, x RMS force
@@ -742,11 +751,18 @@ def _joint(system: System, a: Actuator) -> Link:
 
 
 def simulate(system: System, design: Design, truth: Truth, truth_xml: str, ctrl_or_ref: np.ndarray,
-             q0: np.ndarray, rng, h: float, n: int) -> dict:
+             q0: np.ndarray, rng, h: float, n: int, v0: np.ndarray | None = None,
+             act0: np.ndarray | None = None, meas0: np.ndarray | None = None,
+             rotor0: np.ndarray | None = None) -> dict:
     """Step the truth with ``mj_step`` and log at ``design.rate``; effects applied here.
 
     The command logged at sample k is the one sent at t_k (held until t_k+1): the open-loop
     excitation, or the PD loop's output computed from the *logged* (noisy, offset) positions.
+    ``v0``, ``act0``, ``meas0``, ``rotor0`` (optional): the joints' start velocities, the
+    actuators' activations, the PD loop's previous measurement and the backlash rotors' positions
+    and velocities ``[2, nrotors]``, to start mid-recording (``visibility``). Returns the logged
+    ``qpos``, ``qvel``, ``ctrl``, ``force`` ``[T, ...]``, and the plant's own ``q_true``, ``v_true``
+    ``[T, njoints]``, ``act`` ``[T, na]`` and ``rotor`` ``[T, 2, nrotors]`` at each sample.
     """
     m = mujoco.MjModel.from_xml_string(truth_xml)
     m.opt.timestep = h
@@ -759,11 +775,16 @@ def simulate(system: System, design: Design, truth: Truth, truth_xml: str, ctrl_
            for j in truth.backlash}
     for k, a in enumerate(qadr):
         d.qpos[a] = q0[k]
-    for j, (qa, _) in rot.items():
-        d.qpos[qa] = d.qpos[qadr[jn.index(j)]]
+        if v0 is not None:
+            d.qvel[dadr[k]] = v0[k]
+    for r, (j, (qa, da)) in enumerate(rot.items()):
+        d.qpos[qa] = d.qpos[qadr[jn.index(j)]] if rotor0 is None else rotor0[0, r]
+        d.qvel[da] = d.qvel[dadr[jn.index(j)]] if rotor0 is None else rotor0[1, r]
     for i, a in enumerate(system.actuators):  # integrating servos start at the joint's position
         if a.kind == "intvelocity":
             d.act[m.actuator_actadr[i]] = d.qpos[qadr[jn.index(a.joint)]]
+    if act0 is not None and m.na:
+        d.act[:] = act0
     dt = 1.0 / design.rate
     T = len(ctrl_or_ref)
     nu = len(system.actuators)
@@ -773,10 +794,16 @@ def simulate(system: System, design: Design, truth: Truth, truth_xml: str, ctrl_
     log_q = np.zeros((T, len(jn)))
     log_v = np.zeros((T, len(jn)))
     log_force = np.zeros((T, nu))
-    prev_meas = None
+    log_true = np.zeros((T, 2, len(jn)))
+    log_act = np.zeros((T, m.na))
+    log_rot = np.zeros((T, 2, len(rot)))
+    prev_meas = None if meas0 is None else np.asarray(meas0, float)
     for k in range(T):
         q_true = np.array([d.qpos[a] for a in qadr])
         v_true = np.array([d.qvel[a] for a in dadr])
+        log_true[k] = q_true, v_true
+        log_act[k] = d.act
+        log_rot[k] = [[d.qpos[qa] for qa, _ in rot.values()], [d.qvel[da] for _, da in rot.values()]]
         meas = q_true + np.array([truth.offset.get(j, 0.0) for j in jn])
         if design.quant > 0:
             meas = np.round(meas / design.quant) * design.quant
@@ -825,7 +852,8 @@ def simulate(system: System, design: Design, truth: Truth, truth_xml: str, ctrl_
             if not np.all(np.isfinite(d.qpos)):
                 raise RuntimeError("the true plant diverged")
         log_force[k] = d.actuator_force[:nu]
-    return {"qpos": log_q, "qvel": log_v, "ctrl": sent, "force": log_force, "q_true_end": q_true}
+    return {"qpos": log_q, "qvel": log_v, "ctrl": sent, "force": log_force, "q_true_end": q_true,
+            "q_true": log_true[:, 0], "v_true": log_true[:, 1], "act": log_act, "rotor": log_rot}
 
 
 def _q0(system: System, rng) -> np.ndarray:
@@ -846,12 +874,11 @@ def physics_step(design: Design) -> tuple[float, int]:
     return dt / n, n
 
 
-def generate(case: Case, folder: str) -> dict:
-    """Write the case into ``folder``; returns its description (also ``truth.json``)."""
-    S = systems()
-    system = S[case.system]
+def _setup(case: Case) -> tuple:
+    """What a case's recordings are made from: ``(system, nominal_xml, h, n, T, q0s, excs, amp,
+    sc, rng)``, ``rng`` left where the recordings' own draws start (``generate``)."""
+    system = systems()[case.system]
     design = case.design
-    os.makedirs(folder, exist_ok=True)
     rng = np.random.default_rng(case.seed)
     nominal_xml = write_mjcf(system, design.integrator, design.timestep, design.mass_mode,
                              model_name=f"{case.system}_nominal")
@@ -867,6 +894,15 @@ def generate(case: Case, folder: str) -> dict:
         sc_ctrl = _excitation(system, dataclasses.replace(design, excitation="multisine"), T, dt,
                               np.random.default_rng(case.seed + 7))
     sc = _scales(system, nominal_xml, sc_ctrl, h, n, q0s[0])
+    return system, nominal_xml, h, n, T, q0s, excs, amp, sc, rng
+
+
+def generate(case: Case, folder: str) -> dict:
+    """Write the case into ``folder``; returns its description (also ``truth.json``)."""
+    design = case.design
+    os.makedirs(folder, exist_ok=True)
+    system, nominal_xml, h, n, T, q0s, excs, amp, sc, rng = _setup(case)
+    dt = 1.0 / design.rate
     truth = _truth(case, system, sc)
     truth_xml = write_mjcf(system, design.integrator, design.timestep, design.mass_mode, truth.mods,
                            model_name=f"{case.system}_truth")
@@ -894,6 +930,54 @@ def generate(case: Case, folder: str) -> dict:
     with open(os.path.join(folder, "truth.json"), "w") as f:
         json.dump(desc, f, indent=1)
     return desc
+
+
+def visibility(case: Case, seconds: float = 1.0) -> float:
+    """How far the hidden effects move the measured positions over ``seconds`` from a known state,
+    in units of the measurement's precision (sqrt(noise^2 + step^2 / 12)): each recording, noise-free,
+    is cut into segments; each segment of the true plant is set against the plant without one
+    hidden effect (the other kept; a backlash's band closed, its rotor and mesh kept), started at
+    its true state (positions, velocities, activations, rotors) and sent the same commands (the
+    PD loop closed on its own measurement). The RMS difference over every segment, at the joint
+    where it is largest; of two effects, the less visible one's. A parameter-only case: 0.
+
+    Below a few units the hidden physics moves a prediction about as much as the sensor's own
+    noise does over one diagnosis horizon: the data can show it only through many segments'
+    averages, if at all."""
+    if not case.effects:
+        return 0.0
+    design = case.design
+    system, _, h, n, T, q0s, excs, _, sc, _ = _setup(case)
+    clean = dataclasses.replace(design, noise=0.0, quant=0.0)
+    truth = _truth(case, system, sc)
+
+    def xml(tr, name):
+        return write_mjcf(system, design.integrator, design.timestep, design.mass_mode, tr.mods,
+                          model_name=f"{case.system}_{name}")
+
+    txml = xml(truth, "truth")
+    K = max(2, int(round(seconds * design.rate)))
+    quiet = np.random.default_rng(0)  # (noise-free: its draws are multiplied by 0)
+    runs = [simulate(system, clean, truth, txml, excs[r], q0s[r], quiet, h, n) for r in range(3)]
+    out = []
+    for e in case.effects:
+        base = _truth(dataclasses.replace(case, effects=tuple(x for x in case.effects if x != e)), system, sc)
+        if e[0] == "backlash":  # the band closed, its rotor and mesh kept: what shows is the band
+            joint = next(a.joint for a in system.actuators if a.name == e[1])
+            base.mods.rotor[joint], base.coupling[joint] = truth.mods.rotor[joint], truth.coupling[joint]
+            base.backlash[joint] = 0.0
+        bxml = xml(base, "base")
+        same_rotors = list(base.backlash) == list(truth.backlash)
+        sq, count = np.zeros(len(system.links)), 0
+        for r, a in enumerate(runs):
+            for k0 in range(0, T - K + 1, K):
+                b = simulate(system, clean, base, bxml, excs[r][k0:k0 + K], a["q_true"][k0], quiet, h, n,
+                             v0=a["v_true"][k0], act0=a["act"][k0], meas0=a["qpos"][k0 - 1] if k0 else None,
+                             rotor0=a["rotor"][k0] if same_rotors else None)
+                sq += np.sum((a["qpos"][k0:k0 + K] - b["qpos"]) ** 2, 0)
+                count += K
+        out.append(float(np.max(np.sqrt(sq / count))))
+    return min(out) / math.sqrt(design.noise ** 2 + design.quant ** 2 / 12)
 
 
 def _write_csv(path: str, cols: dict) -> None:

@@ -902,3 +902,51 @@ def test_an_effect_that_helped_but_was_not_named_is_reported_as_not_confirmed():
     sel.rounds = [[trial(sat, 0.5, 3.0, passed=True)]]
     assert _unconfirmed(sel, 0, none, spec) == []
     assert _unconfirmed(sel, 1, none, spec) == []
+
+
+def _restart(case, k0):
+    """The case's true plant run through its first recording, and again from sample ``k0`` at the
+    state it logged there (rotors, activations, the PD loop's last measurement)."""
+    system, _, h, n, T, q0s, excs, _, sc, _ = cases._setup(case)
+    truth = cases._truth(case, system, sc)
+    xml = cases.write_mjcf(system, case.design.integrator, case.design.timestep, case.design.mass_mode, truth.mods)
+    rng = np.random.default_rng(0)
+    a = cases.simulate(system, case.design, truth, xml, excs[0], q0s[0], rng, h, n)
+    b = cases.simulate(system, case.design, truth, xml, excs[0][k0:], a["q_true"][k0], rng, h, n,
+                       v0=a["v_true"][k0], act0=a["act"][k0], meas0=a["qpos"][k0 - 1], rotor0=a["rotor"][k0])
+    return a, b
+
+
+@pytest.mark.parametrize("system, effect, target, excitation", [
+    ("arm2", "backlash", "m_elbow", "pd"),                   # a rotor behind a band, the loop on the measurement
+    ("intvel_pendulum", "backlash", "iservo", "chirp")])     # and a servo's integrated setpoint
+def test_the_truth_restarted_from_a_logged_state_continues_its_run(system, effect, target, excitation):
+    """``visibility`` starts plants mid-recording: from the state the true plant logged at a
+    sample, a restart follows the uninterrupted run (noise-free, as ``visibility`` runs it)."""
+    design = cases.Design("implicitfast", 0.002, "geom", 200.0, 2.0, excitation, 0.0, 0.0, False)
+    case = cases.Case(9101, system, "single", ((effect, target, 2),), design=design)
+    a, b = _restart(case, 150)
+    assert np.max(np.abs(a["qpos"][150:] - b["qpos"])) < 1e-6
+    assert np.ptp(a["qpos"][150:]) > 0.05  # (it moves)
+
+
+def test_visibility_is_the_hidden_physics_in_units_of_the_sensor():
+    """A sensor offset moves every logged position by itself: its visibility is offset / noise.
+    A larger effect is more visible; of two effects the less visible one counts; a case with
+    none hides nothing."""
+    design = cases.Design("implicitfast", 0.002, "geom", 100.0, 3.0, "multisine", 1e-3, 0.0, False)
+    off = cases.Case(9102, "pendulum_geared", "single", (("sensor_offset", "hinge", 1),), design=design)
+    assert cases.visibility(off) == pytest.approx(cases.MAGNITUDES["sensor_offset"][1] / 1e-3, rel=1e-6)
+    small, large = (cases.Case(9103, "pendulum_geared", "single", (("coulomb_friction", "hinge", lv),), design=design)
+                    for lv in (0, 2))
+    v_small, v_large = cases.visibility(small), cases.visibility(large)
+    assert 0 < v_small < v_large
+    both = cases.Case(9103, "pendulum_geared", "double", (("coulomb_friction", "hinge", 0),
+                                                          ("sensor_offset", "hinge", 2)), design=design)
+    # (the offset, 100 units, moves no dynamics: the friction beside it is the less visible one)
+    assert v_small < 100 and cases.visibility(both) == pytest.approx(v_small, rel=1e-6)
+    assert cases.visibility(cases.Case(9104, "pendulum_geared", "none", (), (("mass", "link", 1.2),),
+                                       design=design)) == 0.0
+    # a band is set against the same rotor and mesh with the band closed
+    band = cases.Case(9105, "pendulum_geared", "single", (("backlash", "motor", 2),), design=design)
+    assert 0 < cases.visibility(band) < np.inf
