@@ -89,11 +89,11 @@ def table(rows: list[dict], vis: dict[str, float]) -> str:
         cells = []
         for kind in ("single", "double"):
             rs = [r for r in rows if r["kind"] == kind and band(vis[r["case"]]) == lab]
-            ok = sum(r["correct"] == "True" for r in rs)
+            ok = sum(str(r["correct"]) == "True" for r in rs)  # (read back from a csv: text)
             cells.append(f"{ok}/{len(rs)}" + (f" ({100 * ok / len(rs):.0f}%)" if rs else ""))
         L.append(f"| {lab} | {cells[0]} | {cells[1]} |")
     missed = sorted((vis[r["case"]], r["case"], r["named"]) for r in rows
-                    if r["kind"] != "none" and r["correct"] != "True")
+                    if r["kind"] != "none" and str(r["correct"]) != "True")
     L += ["", "Missed (visibility, case, named):", ""]
     L += [f"- {v:.2f}: {c} -> {n}" for v, c, n in missed]
     return "\n".join(L) + "\n"

@@ -950,3 +950,18 @@ def test_visibility_is_the_hidden_physics_in_units_of_the_sensor():
     # a band is set against the same rotor and mesh with the band closed
     band = cases.Case(9105, "pendulum_geared", "single", (("backlash", "motor", 2),), design=design)
     assert 0 < cases.visibility(band) < np.inf
+
+
+def test_the_visibility_table_counts_answers_per_band():
+    """``effect_visibility.table``: each case in its band, single effects and pairs apart, the
+    misses listed least visible first (answers as ``diagnosis_independent`` writes them, or as
+    read back from its csv)."""
+    spec = importlib.util.spec_from_file_location("bench_effect_visibility", os.path.join(ROOT, "benchmarks", "effect_visibility.py"))
+    ev = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = ev  # (its dataclass looks its module up by name)
+    spec.loader.exec_module(ev)
+    rows = [dict(case="a", kind="single", correct=True, named="x"), dict(case="b", kind="single", correct="False", named="y"),
+            dict(case="c", kind="double", correct="True", named="z"), dict(case="d", kind="single", correct="True", named="w")]
+    text = ev.table(rows, {"a": 0.5, "b": 2.0, "c": 50.0, "d": 12.0})
+    assert "| 0-3 | 1/2 (50%) | 0/0 |" in text and "| 10-30 | 1/1 (100%) | 0/0 |" in text
+    assert "| >= 30 | 0/0 | 1/1 (100%) |" in text and text.strip().endswith("- 2.00: b -> y")
