@@ -48,6 +48,7 @@ EXTRA_SEED = 1000  # first seed of the extra (tuning) list: build_cases(extra=Tr
 FOCUS_SEED = 3000  # first seed of the focus (tuning) list: focus_cases()
 PAIRS_SEED = 3500  # first seed of the backlash + friction (tuning) list: pair_cases()
 SERVO_SEED = 3700  # first seed of the integrating-servo backlash (tuning) list: servo_cases()
+BESIDE_SEED = 3800  # first seed of the drive-effects (tuning) list: beside_cases()
 FRESH_SEED = 4000  # first seed of the fresh test list: build_cases(fresh=True)
 
 
@@ -350,6 +351,8 @@ class Case:
     def split(self) -> str:
         if self.seed >= FRESH_SEED:
             return "fresh"
+        if self.seed >= BESIDE_SEED:
+            return "beside"
         if self.seed >= SERVO_SEED:
             return "servo"
         if self.seed >= PAIRS_SEED:
@@ -553,12 +556,30 @@ def servo_cases() -> list[Case]:
     return cases
 
 
+def beside_cases() -> list[Case]:
+    """The beside list (seeds 3800 and up, split ``beside``), a sixth tuning list made on
+    2026-11-29 after the fresh test list's fourth look named a false backlash beside a right
+    motor lag, saturation or sensor offset in three cases: on every actuator, its motor lag and
+    its saturation, and a sensor offset on its joint, one case each at a magnitude and design of
+    its own (a band must not appear beside them). Deterministic."""
+    S = systems()
+    rng = np.random.default_rng(20261129)
+    cases: list[Case] = []
+    for name, sysm in S.items():
+        app = set(applicable(sysm))
+        for a in sysm.actuators:
+            for e, t in (("motor_lag", a.name), ("actuator_saturation", a.name), ("sensor_offset", a.joint)):
+                if (e, t) in app:
+                    cases.append(_case(BESIDE_SEED + len(cases), S, name, "single", ((e, t, int(rng.integers(3))),), ()))
+    return cases
+
+
 # ------------------------------------------------------------------------------------------------
 # simulation of the truth
 def split_cases(split: str) -> list[Case]:
     """The cases of one list by its name (``tuning``, ``test``, ``extra``, ``focus``, ``pairs``,
     ``servo``, ``fresh``; ``all``: the first list, both halves)."""
-    made = {"focus": focus_cases, "pairs": pair_cases, "servo": servo_cases,
+    made = {"focus": focus_cases, "pairs": pair_cases, "servo": servo_cases, "beside": beside_cases,
             "extra": lambda: build_cases(extra=True), "fresh": lambda: build_cases(fresh=True)}
     cases = made.get(split, build_cases)()
     return [c for c in cases if split == "all" or c.split == split]
