@@ -965,3 +965,24 @@ def test_the_visibility_table_counts_answers_per_band():
     text = ev.table(rows, {"a": 0.5, "b": 2.0, "c": 50.0, "d": 12.0})
     assert "| 0-3 | 1/2 (50%) | 0/0 |" in text and "| 10-30 | 1/1 (100%) | 0/0 |" in text
     assert "| >= 30 | 0/0 | 1/1 (100%) |" in text and text.strip().endswith("- 2.00: b -> y")
+
+
+def test_a_servo_at_its_force_limit_is_fitted_with_the_models_mass(tmp_path):
+    """A position servo held at its force limit most of the time moves as ``m a + c v = +-L``:
+    every common scale of mass, damping and limit fits alike, and the fit slides along it (a
+    23 N limit fitted at 320 N with a 70 kg carriage of 5 kg, the beside list's 3834). A passing
+    candidate that needs a far mass is fitted again with the masses held at the model's
+    (``Selector._at_model_masses``): the limit comes out at the truth's."""
+    design = dataclasses.replace({c.seed: c for c in cases.split_cases("beside")}[3834].design, seconds=6.0, rate=500.0)
+    case = cases.Case(3834, "linear_axis", "single", (("actuator_saturation", "drive", 2),), design=design)
+    d, _ = _run(tmp_path, case)
+    (sel,) = d["selected"]
+    true = cases.generate(case, str(tmp_path / "case"))["truth_values"]["actuator_saturation@drive"]["saturation:drive"]
+    assert sel["effect"] == "actuator_saturation" and "masses held at the model's" in sel["note"]
+    assert sel["params"]["saturation:drive"] == pytest.approx(true, rel=0.05)
+    assert d["nominal_refit"]["mass:carriage"]["std"] is None  # (held)
+    # without the rule the same limit is named on the far scale
+    d2, _ = _run(tmp_path / "off", case, plausible_masses=False)
+    assert d2["selected"][0]["params"]["saturation:drive"] > 10 * true
+    assert d2["nominal_refit"]["mass:carriage"]["fitted"] > 10 * 5.0
+    assert d["fit"]["after"] < d2["fit"]["after"]
