@@ -80,7 +80,8 @@ class DiagnoseConfig:
       top: candidates fitted in full per selection round (the best by the screen).
       max_effects: at most this many effects are named.
       plausible_masses: of the effects that pass in a round, one whose fit keeps every re-fitted
-        body mass within ``FAR_MASS`` of the model's is preferred (``SelectConfig``).
+        body mass within ``FAR_MASS`` of the model's is preferred, and one that needs a mass
+        further off is fitted again with the masses held at the model's (``SelectConfig``).
       geared: once a Coulomb friction is named on a joint, a backlash on its actuator is fitted in
         the later rounds whatever its screen score (``SelectConfig``).
       backlash_starts: a backlash is fitted from this many widths of its grid, the best kept

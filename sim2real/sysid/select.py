@@ -139,6 +139,9 @@ class SelectConfig:
         gets its masses roughly right, and a mass 50x off stands in for physics the effect leaves
         unexplained (a flywheel whose backlash a motor lag "explained" with the wheel at 1/58 of
         its mass). Only where none passes with plausible masses does the best of the rest join.
+        Before that choice, a passing fit that needs a far mass is fitted again with the masses
+        held at the model's, and replaces the first where it passes too (``_at_model_masses``:
+        a servo at its force limit lets mass and force scale together; ``tuning.md`` step 66).
       backlash_starts: a backlash is fitted from the best points at this many widths of its grid,
         and the fit with the lowest training objective is kept. The band's effect on the motion
         changes in steps as it widens (the motor side's impacts come and go), so a fit moves its
