@@ -574,17 +574,17 @@ def beside_cases() -> list[Case]:
     return cases
 
 
-# ------------------------------------------------------------------------------------------------
-# simulation of the truth
 def split_cases(split: str) -> list[Case]:
     """The cases of one list by its name (``tuning``, ``test``, ``extra``, ``focus``, ``pairs``,
-    ``servo``, ``fresh``; ``all``: the first list, both halves)."""
+    ``servo``, ``beside``, ``fresh``; ``all``: the first list, both halves)."""
     made = {"focus": focus_cases, "pairs": pair_cases, "servo": servo_cases, "beside": beside_cases,
             "extra": lambda: build_cases(extra=True), "fresh": lambda: build_cases(fresh=True)}
     cases = made.get(split, build_cases)()
     return [c for c in cases if split == "all" or c.split == split]
 
 
+# ------------------------------------------------------------------------------------------------
+# simulation of the truth
 MAGNITUDES = {  # relative levels 0, 1, 2 of each effect (scaled per system in ``_truth``)
     "coulomb_friction": (0.05, 0.1, 0.2),        # x the joint's RMS generalised force
     "viscous_damping": (0.1, 0.2, 0.4),          # force at RMS speed, x RMS force
