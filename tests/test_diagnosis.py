@@ -980,7 +980,9 @@ def test_a_servo_at_its_force_limit_is_fitted_with_the_models_mass(tmp_path):
     true = cases.generate(case, str(tmp_path / "case"))["truth_values"]["actuator_saturation@drive"]["saturation:drive"]
     assert sel["effect"] == "actuator_saturation" and "masses held at the model's" in sel["note"]
     assert sel["params"]["saturation:drive"] == pytest.approx(true, rel=0.05)
-    assert d["nominal_refit"]["mass:carriage"]["std"] is None  # (held)
+    assert d["nominal_refit"]["mass:carriage"]["std"] is None  # (held, and the report says so)
+    assert "| `mass:carriage` | 5 | " in open(tmp_path / "diag" / "report.md").read() and "| held |" in open(
+        tmp_path / "diag" / "report.md").read()
     # without the rule the same limit is named on the far scale
     d2, _ = _run(tmp_path / "off", case, plausible_masses=False)
     assert d2["selected"][0]["params"]["saturation:drive"] > 10 * true

@@ -356,7 +356,8 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
                  f"{c['heldout_nrmse']:.4g}" if c.get("heldout_nrmse") is not None else ""] for c in e["candidates"]])]
     B += [("h2", "Nominal parameters re-fitted"),
           ("table", ["parameter", "nominal", "fitted", "std", "95% interval", "unit"],
-           [[f"`{n}`", f"{v['nominal']:.6g}", f"{v['fitted']:.6g}", _fmt(v["std"]), ci(v["fitted"], v["std"]), v["unit"]]
+           [[f"`{n}`", f"{v['nominal']:.6g}", f"{v['fitted']:.6g}", "held" if v["std"] is None else _fmt(v["std"]),
+             ci(v["fitted"], v["std"]), v["unit"]]
             for n, v in d["nominal_refit"].items()])]
     if d["notes"]:
         B += [("h2", "Notes"), ("list", list(d["notes"]))]
