@@ -222,7 +222,7 @@ def main(args: Settings):
     if os.path.exists(vis_path):  # the list's visibilities, once computed (effect_visibility.py)
         import effect_visibility
 
-        vis = effect_visibility.visibilities(args.split, 1.0, 1, vis_path)
+        vis = effect_visibility.read(vis_path)
         text += ("\nBy the hidden physics' visibility (`effect_visibility.py`: x the sensor's precision):\n\n"
                  + effect_visibility.table([r for r in rows if r["kind"] != "none"], vis))
     with open(os.path.join(out, "summary.md"), "w") as f:

@@ -48,11 +48,16 @@ def _one(args: tuple) -> tuple[str, float]:
     return case.label, sysid_cases.visibility(case, seconds)
 
 
+def read(path: str) -> dict[str, float]:
+    """``{case label: visibility}`` as ``visibilities`` wrote it."""
+    with open(path) as f:
+        return {r["case"]: float(r["visibility"]) for r in csv.DictReader(f)}
+
+
 def visibilities(split: str, seconds: float, jobs: int, path: str) -> dict[str, float]:
     """``{case label: visibility}`` of a list, read from ``path`` if an earlier run wrote it."""
     if os.path.exists(path):
-        with open(path) as f:
-            return {r["case"]: float(r["visibility"]) for r in csv.DictReader(f)}
+        return read(path)
     cases = [c for c in sysid_cases.split_cases(split) if c.effects]
     if not cases:
         raise SystemExit(f"split '{split}' has no case with a hidden effect")

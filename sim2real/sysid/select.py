@@ -735,9 +735,10 @@ class Selector:
         and limit leaves unchanged, and the fit slides along it (the beside list's 3834: a 23 N
         limit fitted at 320 N beside a 70 kg carriage of 5 kg). Judged with that mass, the right
         effect lost to a worse one with plausible masses."""
-        if not (self.cfg.plausible_masses and trial.passed and self.far_masses(trial.model)):
-            return trial
         C = trial.model
+        far_names = self.far_masses(C) if self.cfg.plausible_masses and trial.passed else []
+        if not far_names:
+            return trial
         masses = [n for n in C.params if n.startswith("mass:")]
         z0 = C.z.copy()
         for n in masses:
@@ -745,7 +746,7 @@ class Selector:
             z0[i] = nominal if is_far_mass(nominal, float(M.z[i])) else M.z[i]
         # start where that scale symmetry puts the fit at these masses: every force and inertia
         # scaled with them (the far masses' common factor)
-        far = self.spec.indices(self.far_masses(C))
+        far = self.spec.indices(far_names)
         k = float(np.exp(np.mean(np.log(z0[far] / C.z[far]))))
         for n in C.params:
             p = self.spec[n]
@@ -756,7 +757,7 @@ class Selector:
         passed, ratio, t, note = self._accept(M, C2, not M.effects)
         if not passed:
             return trial
-        first = ", ".join(f"{n} = {float(C.z[self.spec.index(n)]):.4g}" for n in self.far_masses(C))
+        first = ", ".join(f"{n} = {float(C.z[self.spec.index(n)]):.4g}" for n in far_names)
         trial.model, trial.val_ratio, trial.t = C2, ratio, t  # (in place: the round's record shows this fit)
         trial.note = "; ".join(x for x in (trial.note, note, f"fitted again with the masses held at the model's "
                                            f"(the first fit needed {first}: forces and masses scaled together)") if x)
