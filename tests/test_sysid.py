@@ -666,3 +666,36 @@ def test_backlash_on_an_integrating_servo_is_a_rotor_behind_a_dead_band(tmp_path
     assert rms(with_band, bare) > 0.01                          # the band matters here
     assert rms(stage(b), with_band) < 0.1 * rms(with_band, bare)
     np.testing.assert_allclose(stage(0.0), bare, atol=1e-5)
+
+
+def test_an_integrating_servo_starts_where_a_sensor_offset_says_the_joint_is(tmp_path):
+    """Against native MuJoCo: an ``intvelocity`` servo on a pendulum starts holding its joint's
+    true position, and the logger reads it 0.05 rad off. With that offset hypothesised, the
+    servo's setpoint starts at the measured position less the offset, so the true physics
+    predicts every segment; started at the measured one, the servo would pull by the offset."""
+    from sim2real.sysid.shooting import Shooting
+    from sim2real.sysid.system import System
+    from sim2real.sysid.trajectory import from_recording
+
+    xml = tmp_path / "servo.xml"
+    xml.write_text("""<mujoco><option timestep="0.001"/><worldbody>
+      <body name="bar"><joint name="pivot" type="hinge" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.015" mass="0.25"/></body></worldbody>
+      <actuator><intvelocity name="iv" joint="pivot" kp="6" kv="0.1" actrange="-10 10"/></actuator></mujoco>""")
+    m = mujoco.MjModel.from_xml_path(str(xml))
+    d = mujoco.MjData(m)
+    d.qpos[0] = d.act[0] = 0.4
+    T, offset = 2000, 0.05
+    u = 1.5 * np.sin(2 * np.pi * 0.7 * np.arange(T) * 1e-3)
+    q = np.empty(T)
+    for k in range(T):
+        q[k] = d.qpos[0]
+        d.ctrl[0] = u[k]
+        mujoco.mj_step(m, d)
+    path = str(tmp_path / "rec.csv")
+    save_csv(path, np.arange(T) * 1e-3, {"qpos:pivot": q + offset, "ctrl:iv": u})
+    system = System(str(xml), dt=1e-3)
+    sh = Shooting(system, [from_recording(load(path, m), system)], 100, val_fraction=0.3)
+    tiles = sh.tiles.of("fit")
+    pred = sh.predict(system.spec.vector({"sensor_offset:pivot": offset})[None], sh.v0[None], tiles)["qpos"][0]
+    assert np.abs(pred - sh.signals["qpos"][tiles]).max() < 0.1 * offset

@@ -157,14 +157,16 @@ class Shooting:
         self.sigma_v = local * 1.5 + 1e-9 * (np.abs(self.v0).max(0) + 1)   # [S, nv]
         # inputs of the jitted function (device arrays, passed as arguments, not baked in)
         act0 = np.zeros((len(trajs), m.na))
+        dact = np.zeros((len(trajs), m.na, m.nq))
         for r, tr in enumerate(trajs):
-            act0[r] = self._initial_activation(tr)
+            act0[r], dact[r] = self._initial_activation(tr)
         self._data = dict(
             ctrl=jnp.asarray(cat(lambda tr: tr.ctrl), jnp.float32),
             qfrc=jnp.asarray(cat(lambda tr: tr.qfrc), jnp.float32),
             q=jnp.asarray(q_all, jnp.float32), v=jnp.asarray(cat(lambda tr: tr.v), jnp.float32),
             start=jnp.asarray(st, jnp.int32), first=jnp.asarray(self.tiles.first),
-            act0=jnp.asarray(act0[self.tiles.traj], jnp.float32), q0=jnp.asarray(self.q0, jnp.float32))
+            act0=jnp.asarray(act0[self.tiles.traj], jnp.float32), q0=jnp.asarray(self.q0, jnp.float32),
+            dact=jnp.asarray(dact[self.tiles.traj], jnp.float32))
         # the command path's pre-run: recordings are independent (each starts at rest), so they run
         # side by side, each scanning its own segments in order (``order [R, Smax]``, padded with
         # its last segment); ``flat [S]`` finds segment s in the [R * Smax] result
@@ -193,9 +195,11 @@ class Shooting:
         mesh = parallel.batch_sharding(self.B).mesh
         return jax.jit(mapped), jax.device_put(data, jax.sharding.NamedSharding(mesh, P()))
 
-    def _initial_activation(self, tr) -> np.ndarray:
+    def _initial_activation(self, tr) -> tuple[np.ndarray, np.ndarray]:
+        """A recording's activations at its first sample ``[na]``, and how they move with the
+        joints' positions there ``[na, nq]`` (an integrating servo's setpoint, ``_command_states``)."""
         m = self.sys.mj
-        act, length = np.zeros(m.na), None
+        act, dact, d = np.zeros(m.na), np.zeros((m.na, m.nq)), None
         for a in range(m.nu):
             adr = m.actuator_actadr[a]
             if adr < 0:
@@ -203,15 +207,18 @@ class Shooting:
             if m.actuator_dyntype[a] == mujoco.mjtDyn.mjDYN_INTEGRATOR:
                 # an integrating servo holds its joint (or tendon) where it starts: its setpoint
                 # is the actuator's length there (gear x joint position for a joint)
-                if length is None:
+                if d is None:
                     d = mujoco.MjData(m)
                     d.qpos[:] = tr.q[0]
                     mujoco.mj_forward(m, d)
-                    length = d.actuator_length.copy()
-                act[adr] = length[a] if m.actuator_biasprm[a, 1] != 0 else 0.0
+                    moment = np.zeros((m.nu, m.nv))
+                    mujoco.mju_sparse2dense(moment, d.actuator_moment, d.moment_rownnz, d.moment_rowadr,
+                                            d.moment_colind)
+                if m.actuator_biasprm[a, 1] != 0:
+                    act[adr], dact[adr] = d.actuator_length[a], moment[a]   # (hinges and slides: nq = nv)
             else:  # filters: at rest under the first command
                 act[adr] = tr.ctrl[0, a]
-        return act
+        return act, dact
 
     def _act_step(self, act, u, h):
         """MuJoCo's activation dynamics for one step of length ``h`` (Euler; exact for filterexact)."""
@@ -246,7 +253,13 @@ class Shooting:
             # a recording starts with its command path at rest under its first command
             rest = fx.steady_state(data["ctrl"][data["start"][s]])
             es = jax.tree_util.tree_map(lambda a, b: jnp.where(data["first"][s], b, a), es, rest)
-            act = jnp.where(data["first"][s], data["act0"][s], act)
+            # an integrating servo's setpoint starts where the joint is, and a hypothesised sensor
+            # offset moves where that is: at the measured position less the offset, not at the
+            # measured one (there the servo would start pulling by the offset; the beside list's
+            # 3847: a 0.02 rad offset screened at -1309 and was never fitted)
+            q_first = data["q"][data["start"][s]]
+            act0 = data["act0"][s] + data["dact"][s] @ (fx.unsense(z, q_first) - q_first)
+            act = jnp.where(data["first"][s], act0, act)
             out = (es, act)
 
             def sample(c, k):
