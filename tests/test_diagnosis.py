@@ -298,10 +298,12 @@ class _Stub:
         self.cfg = SelectConfig()
         self.fit_tiles, self.val_tiles = np.arange(10), np.arange(10, 20)
         self.pruned, self.step_level, self.progress, self.units = [], 0.0, lambda text: None, []
-        self._finer, self._fine = None, select._UNBUILT
+        self._finer, self._fine, self._fine_fits = None, select._UNBUILT, {}
         # one parameter vector entry (an effect's own value, where a test sets it); 1 ms samples and steps
         self.spec = types.SimpleNamespace(index=lambda name: 0)
-        self.f = types.SimpleNamespace(sh=types.SimpleNamespace(dt=0.001, sys=types.SimpleNamespace(h=0.001)))
+        self.f = types.SimpleNamespace(sh=types.SimpleNamespace(dt=0.001, sys=types.SimpleNamespace(h=0.001)),
+                                       scales={})
+        self.nominal = []
 
 
 class _Fine:
@@ -310,7 +312,11 @@ class _Fine:
     v_hat = None
 
     def __init__(self, at_finer, calls):
-        self.at_finer, self.calls = at_finer, calls
+        self.at_finer, self.calls, self.scales, self.fits = at_finer, calls, {}, []
+
+    def fit(self, z0, v0, names, tiles, iters=6, bounds=None):   # (re-fitted at that step: ``finer_refit``)
+        self.fits.append(iters)
+        return types.SimpleNamespace(z=z0)
 
     def velocities_many(self, zs, v0s, tiles):
         self.calls.append(len(zs))
@@ -542,7 +548,9 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     misfitting by less than the physics step alone causes is simulated again (both models) at a
     finer step: named if it keeps its gain there (a real effect; that step's own measured floor
     is not asked), not if the gain goes with the step (an effect that took up the integrator's
-    error), nor when the check is off."""
+    error), nor when the check is off. Both models are re-fitted at that step first, the one
+    extended once (``finer_refit``), and a gain that only partly stays there is not enough
+    (``finer_ratio``)."""
     from sim2real.sysid.candidates import Candidate
 
     A = Candidate("backlash", "m", ("backlash:m",), ((0.1,),), (1.0,), ((0.0, 1.0),))
@@ -554,17 +562,24 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     sel.step_level = 0.5                                   # the base misfits by 0.42 per residual
     M, C = fit([], 0, 0), fit([A], 0, 0)
     calls = []
-    sel._finer = lambda k: _Fine([base, half * 1.05], calls)     # the gain stays: named
+    fine = _Fine([base, half * 0.9], calls)                # the gain stays: named
+    sel._finer = lambda k: fine
     ok, ratio, t, note = sel._accept(M, C, first=True)
     assert ok and ratio < 0.6 and "4x finer step" in note and "passes" in note
+    assert fine.fits == [3, 3]                             # both re-fitted there ...
+    sel._accept(M, C, first=True)
+    assert fine.fits == [3, 3]                             # ... once
+    sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base, half * 1.5], calls)   # a third of it stays
+    ok, _, _, note = sel._accept(M, C, first=True)
+    assert not ok and note.endswith("fails")
     sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base * 0.5, half], calls)   # the gain was the step's
     assert not sel._accept(M, C, first=True)[0]
     sel._fine, sel.cfg = select._UNBUILT, dataclasses.replace(sel.cfg, finer=0)   # off: the floor decides
     assert not sel._accept(M, C, first=True)[0]
-    assert calls == [2, 2]
+    assert calls == [2, 2, 2, 2]
     # above the floor no finer simulation is needed
     sel.step_level = 0.01
-    assert sel._accept(M, C, first=True)[0] and calls == [2, 2]
+    assert sel._accept(M, C, first=True)[0] and calls == [2, 2, 2, 2]
 
 
 def test_a_delay_shorter_than_one_physics_step_is_judged_again_at_a_finer_step():
@@ -586,7 +601,7 @@ def test_a_delay_shorter_than_one_physics_step_is_judged_again_at_a_finer_step()
     sel._finer = lambda k: _Fine([base, base * 1.01], calls)    # the gain goes with the step
     ok, ratio, t, note = sel._accept(M, C, first=False)
     assert not ok and ratio < 0.6 and "0.4 ms, shorter than the 1 ms physics step" in note and note.endswith("fails")
-    sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base, better * 1.05], calls)   # it stays: named
+    sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base, better * 0.9], calls)   # it stays: named
     assert sel._accept(M, C, first=False)[0] and calls == [2, 2]
     fits[frozenset({"action_delay"})] = (3000.0, better, 0.0, 3.0)      # three samples: judged as it is
     assert sel._accept(M, fit([D], 0, 0), first=False)[0] and calls == [2, 2]

@@ -748,8 +748,8 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     z0 = spec.default.copy()
     notes = list(system.notes) + list(sel.refits) + list(sel.pruned)
     if any(system.mj.actuator_dyntype[a] != 0 for a in range(system.mj.nu)):
-        notes.append("actuator activations start at rest: an integrating servo at its joint's measured "
-                     "position, a filter at the first command")
+        notes.append("actuator activations start at rest: an integrating servo at its joint's position (the "
+                     "measured one, less a fitted sensor offset), a filter at the first command")
     # what was found, step by step
     selected = []
     for k, c in enumerate(chosen.effects):
