@@ -569,7 +569,7 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     assert fine.fits == [3, 3]                             # both re-fitted there ...
     sel._accept(M, C, first=True)
     assert fine.fits == [3, 3]                             # ... once
-    sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base, half * 1.5], calls)   # a third of it stays
+    sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base, half * 1.5], calls)   # a quarter of it stays
     ok, _, _, note = sel._accept(M, C, first=True)
     assert not ok and note.endswith("fails")
     sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base * 0.5, half], calls)   # the gain was the step's
