@@ -264,10 +264,14 @@ class Selector:
         """Fit the nominal parameters, ``effects``' and ``extra`` together from ``z0`` (those in
         ``hold`` kept at their values in ``z0``)."""
         params = [n for n in list(self.nominal) + [n for c in effects for n in c.params] + list(extra) if n not in hold]
-        self.f.scales.update(self._scales(effects))
+        return Model(list(effects), self._fit_with(self.f, effects, z0, v0, params, self.cfg.iters), None, params)
+
+    def _fit_with(self, fitter, effects: list[Candidate], z0, v0, params: list, iters: int):
+        """``params`` fitted from ``z0`` by ``fitter`` (this step's or the finer one's), each
+        effect's inside its search range."""
+        fitter.scales.update(self._scales(effects))
         bounds = {n: r for c in effects for n, r in zip(c.params, c.search)}
-        res = self.f.fit(z0, v0, params, self.fit_tiles, iters=self.cfg.iters, bounds=bounds)
-        return Model(list(effects), res, None, params)
+        return fitter.fit(z0, v0, params, self.fit_tiles, iters=iters, bounds=bounds)
 
     def validate(self, models: list[Model]) -> None:
         """Each model's per-segment validation objective (velocities refined), simulated together."""
@@ -526,9 +530,7 @@ class Selector:
             return X.z
         hit = self._fine_fits.get(id(X))
         if hit is None or hit[0] is not f2:
-            bounds = {n: r for c in X.effects for n, r in zip(c.params, c.search)}
-            f2.scales.update(self._scales(X.effects))
-            res = f2.fit(X.z, X.result.v0, X.params, self.fit_tiles, iters=self.cfg.finer_refit, bounds=bounds)
+            res = self._fit_with(f2, X.effects, X.z, X.result.v0, X.params, self.cfg.finer_refit)
             hit = self._fine_fits[id(X)] = (f2, X, res.z)   # (X kept: its id is not reused while cached)
         return hit[2]
 
