@@ -49,6 +49,7 @@ FOCUS_SEED = 3000  # first seed of the focus (tuning) list: focus_cases()
 PAIRS_SEED = 3500  # first seed of the backlash + friction (tuning) list: pair_cases()
 SERVO_SEED = 3700  # first seed of the integrating-servo backlash (tuning) list: servo_cases()
 BESIDE_SEED = 3800  # first seed of the drive-effects (tuning) list: beside_cases()
+TIMING_SEED = 3900  # first seed of the action-delay (tuning) list: timing_cases()
 FRESH_SEED = 4000  # first seed of the fresh test list: build_cases(fresh=True)
 
 
@@ -351,6 +352,8 @@ class Case:
     def split(self) -> str:
         if self.seed >= FRESH_SEED:
             return "fresh"
+        if self.seed >= TIMING_SEED:
+            return "timing"
         if self.seed >= BESIDE_SEED:
             return "beside"
         if self.seed >= SERVO_SEED:
@@ -574,10 +577,26 @@ def beside_cases() -> list[Case]:
     return cases
 
 
+def timing_cases() -> list[Case]:
+    """The timing list (seeds 3900 and up, split ``timing``), a seventh tuning list made on
+    2026-11-29 after the fresh test list's sixth look named a motor lag for a true action delay
+    (twice, once at 5857 times the sensor's precision) and a delay beside a right lag: on every
+    system, its action delay at each of the three magnitudes, each by a design of its own (a lag
+    must not be named for it). Deterministic."""
+    S = systems()
+    cases: list[Case] = []
+    for name, sysm in S.items():
+        if ("action_delay", "") in applicable(sysm):
+            for mag in range(3):
+                cases.append(_case(TIMING_SEED + len(cases), S, name, "single", (("action_delay", "", mag),), ()))
+    return cases
+
+
 def split_cases(split: str) -> list[Case]:
     """The cases of one list by its name (``tuning``, ``test``, ``extra``, ``focus``, ``pairs``,
-    ``servo``, ``beside``, ``fresh``; ``all``: the first list, both halves)."""
+    ``servo``, ``beside``, ``timing``, ``fresh``; ``all``: the first list, both halves)."""
     made = {"focus": focus_cases, "pairs": pair_cases, "servo": servo_cases, "beside": beside_cases,
+            "timing": timing_cases,
             "extra": lambda: build_cases(extra=True), "fresh": lambda: build_cases(fresh=True)}
     cases = made.get(split, build_cases)()
     return [c for c in cases if split == "all" or c.split == split]
