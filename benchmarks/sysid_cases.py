@@ -50,6 +50,7 @@ PAIRS_SEED = 3500  # first seed of the backlash + friction (tuning) list: pair_c
 SERVO_SEED = 3700  # first seed of the integrating-servo backlash (tuning) list: servo_cases()
 BESIDE_SEED = 3800  # first seed of the drive-effects (tuning) list: beside_cases()
 TIMING_SEED = 3900  # first seed of the action-delay (tuning) list: timing_cases()
+COMBOS_SEED = 6000  # first seed of the two-effect (tuning) list: combos_cases() (after the fresh list's seeds)
 FRESH_SEED = 4000  # first seed of the fresh test list: build_cases(fresh=True)
 
 
@@ -350,6 +351,8 @@ class Case:
 
     @property
     def split(self) -> str:
+        if self.seed >= COMBOS_SEED:
+            return "combos"
         if self.seed >= FRESH_SEED:
             return "fresh"
         if self.seed >= TIMING_SEED:
@@ -478,10 +481,7 @@ def build_cases(extra: bool = False, fresh: bool = False) -> list[Case]:
         kinds = {}
         for e, t in app:
             kinds.setdefault(e, []).append(t)
-        combos = [("coulomb_friction", "action_delay"), ("mass_offset", "motor_lag"), ("coulomb_friction", "mass_offset"),
-                  ("action_delay", "actuator_saturation"), ("joint_stiffness", "sensor_offset"),
-                  ("coulomb_friction", "coulomb_friction"), ("viscous_damping", "motor_lag"),
-                  ("backlash", "coulomb_friction")]
+        combos = COMBOS
         for a, b in combos:
             if a in kinds and b in kinds:
                 ta = kinds[a][0]
@@ -592,11 +592,43 @@ def timing_cases() -> list[Case]:
     return cases
 
 
+# the pairs of kinds ``build_cases`` draws its two-effect cases from
+COMBOS = (("coulomb_friction", "action_delay"), ("mass_offset", "motor_lag"), ("coulomb_friction", "mass_offset"),
+          ("action_delay", "actuator_saturation"), ("joint_stiffness", "sensor_offset"),
+          ("coulomb_friction", "coulomb_friction"), ("viscous_damping", "motor_lag"),
+          ("backlash", "coulomb_friction"))
+
+
+def combos_cases() -> list[Case]:
+    """The combos list (seeds 6000 and up, split ``combos``), an eighth tuning list made on
+    2026-11-29 after the fresh test list's sixth look named both effects in 15 of its 24 pairs:
+    on every system, every pair of kinds the lists draw two-effect cases from but a backlash and a
+    friction (the pairs list has those), its targets drawn at random among the system's, once at
+    magnitudes 1 + 2 and once at 2 + 1, each by a design of its own. Deterministic."""
+    S = systems()
+    rng = np.random.default_rng(20261130)
+    cases: list[Case] = []
+    for name, sysm in S.items():
+        kinds: dict[str, list[str]] = {}
+        for e, t in applicable(sysm):
+            kinds.setdefault(e, []).append(t)
+        for a, b in COMBOS[:-1]:
+            if a not in kinds or b not in kinds or (a == b and len(kinds[a]) < 2):
+                continue
+            for ma, mb in ((1, 2), (2, 1)):
+                if a == b:
+                    ta, tb = (str(x) for x in rng.choice(kinds[a], 2, replace=False))
+                else:
+                    ta, tb = str(rng.choice(kinds[a])), str(rng.choice(kinds[b]))
+                cases.append(_case(COMBOS_SEED + len(cases), S, name, "double", ((a, ta, ma), (b, tb, mb)), ()))
+    return cases
+
+
 def split_cases(split: str) -> list[Case]:
     """The cases of one list by its name (``tuning``, ``test``, ``extra``, ``focus``, ``pairs``,
-    ``servo``, ``beside``, ``timing``, ``fresh``; ``all``: the first list, both halves)."""
+    ``servo``, ``beside``, ``timing``, ``combos``, ``fresh``; ``all``: the first list, both halves)."""
     made = {"focus": focus_cases, "pairs": pair_cases, "servo": servo_cases, "beside": beside_cases,
-            "timing": timing_cases,
+            "timing": timing_cases, "combos": combos_cases,
             "extra": lambda: build_cases(extra=True), "fresh": lambda: build_cases(fresh=True)}
     cases = made.get(split, build_cases)()
     return [c for c in cases if split == "all" or c.split == split]
