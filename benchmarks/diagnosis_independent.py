@@ -161,7 +161,7 @@ def summarise(rows: list[dict], title: str, jobs: int = 1, devices: int = 1) -> 
 
 @dataclasses.dataclass
 class Settings:
-    """split: which cases; only: cases whose label contains this text; work: where generated cases are
+    """split: which cases; only: cases whose label contains this text (several, comma-separated: any); work: where generated cases are
     kept; out: results root; tag: suffix of the results folder; jobs: processes; note: a line for the
     test-split log (why this look); diagnose: diagnosis settings other than the defaults
     (``diagnose.min_gain=0.01``; tuning runs only)."""
@@ -176,7 +176,7 @@ class Settings:
 
 
 def main(args: Settings):
-    cases = [c for c in sysid_cases.split_cases(args.split) if args.only in c.label]
+    cases = [c for c in sysid_cases.split_cases(args.split) if any(o in c.label for o in args.only.split(","))]
     listed = sysid_cases.build_cases(fresh=args.split == "fresh")
     out = os.path.join(args.out, args.split + args.tag)
     options = dict(args.diagnose)

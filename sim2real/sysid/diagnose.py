@@ -88,6 +88,8 @@ class DiagnoseConfig:
         (``SelectConfig``).
       band_scan: after a backlash's fits, this many widths over its range are simulated together
         and the fit is started again from one that fits better (0: off; ``SelectConfig``).
+      band_shown: a backlash is named only if its band passes against the same fit with the
+        band closed and the motor side kept (``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
@@ -148,6 +150,7 @@ class DiagnoseConfig:
     geared: bool = SelectConfig.geared
     backlash_starts: int = SelectConfig.backlash_starts
     band_scan: int = SelectConfig.band_scan
+    band_shown: bool = SelectConfig.band_shown
     refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
@@ -547,7 +550,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                     floor_level=cfg.floor_level, strong=cfg.strong, top=cfg.top,
                                     max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer,
                                     plausible_masses=cfg.plausible_masses, geared=cfg.geared,
-                                    backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan),
+                                    backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan,
+                                    band_shown=cfg.band_shown),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
                        allowed=cfg.expressible or None)
         final, steps = sel.run()
