@@ -161,11 +161,13 @@ def summarise(rows: list[dict], title: str, jobs: int = 1, devices: int = 1) -> 
 
 @dataclasses.dataclass
 class Settings:
-    """split: which cases; only: cases whose label contains this text (several, comma-separated: any); work: where generated cases are
-    kept; out: results root; tag: suffix of the results folder; jobs: processes; note: a line for the
-    test-split log (why this look); diagnose: diagnosis settings other than the defaults
+    """split: which cases; only: cases whose label contains this text (several, comma-separated:
+    any); work: where generated cases are kept; out: results root; tag: suffix of the results
+    folder; jobs: processes; note: a line for the test-split log (why this look); diagnose:
+    diagnosis settings other than the defaults
     (``diagnose.min_gain=0.01``; tuning runs only)."""
-    split: Literal["tuning", "test", "all", "extra", "focus", "pairs", "servo", "beside", "timing", "combos", "fresh"] = "tuning"
+    split: Literal["tuning", "test", "all", "extra", "focus", "pairs", "servo", "beside", "timing", "combos",
+                   "fresh"] = "tuning"
     only: str = ""
     work: str = os.path.join("runs", "sysid_cases")
     out: str = OUT

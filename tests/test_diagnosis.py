@@ -582,6 +582,58 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     assert sel._accept(M, C, first=True)[0] and calls == [2, 2, 2, 2]
 
 
+def test_the_case_lists_keep_their_seeds_apart_and_the_test_lists_frozen():
+    """Every list of ``benchmarks/sysid_cases.py`` holds only its own split's cases, no seed is in
+    two lists, and the two test lists still hash to the fingerprints frozen before their first
+    run (a new tuning list, or a change to how pairs are drawn, must leave them as they were)."""
+    names = ("tuning", "test", "extra", "focus", "pairs", "servo", "beside", "timing", "combos", "fresh")
+    seen = {}
+    for name in names:
+        for c in cases.split_cases(name):
+            assert c.split == name, (c.label, name)
+            assert seen.setdefault(c.seed, name) == name, (c.seed, seen[c.seed], name)
+    results = os.path.join(ROOT, "benchmarks", "results", "diagnosis_independent")
+    for frozen, listed in (("cases_frozen.json", cases.build_cases()), ("cases_fresh_frozen.json", cases.build_cases(fresh=True))):
+        with open(os.path.join(results, frozen)) as f:
+            assert json.load(f)["fingerprint"] == cases.fingerprint(listed), frozen
+
+
+def test_a_band_fitted_at_the_bottom_of_its_range_must_beat_its_band_closed():
+    """``SelectConfig.band_shown``: a backlash that passes with its width at the bottom of its range
+    is fitted again with the band closed (the width held near 0, the motor side kept): where that
+    fit predicts the validation segments as well, the gain was the motor side's inertia and the
+    band is not named; where the closed fit is far worse, it is. A band whose fit kept a width
+    inside its range is not asked."""
+    from sim2real.sysid.candidates import Candidate
+    from sim2real.sysid.select import Trial
+
+    A = Candidate("backlash", "m", ("backlash:m",), ((0.01,),), (1.0,), ((0.001, 0.06),))
+    rng = np.random.default_rng(4)
+    base, good = 40 + rng.uniform(0, 4, 10), 10 + rng.uniform(0, 1, 10)
+    for width, closed_val, named, asked in ((0.001, good * 1.01, False, True), (0.001, base, True, True),
+                                            (0.02, good * 1.01, True, False)):
+        fits = {frozenset(): (5000.0, base), frozenset({"backlash@m"}): (3000.0, good, 0.0, width)}
+        sel, fit = _selector(fits)
+        held = []
+
+        def fit_held(effects, z0, v0, extra=(), hold=(), fit=fit, closed_val=closed_val, held=held):
+            if not hold:
+                return fit(effects, z0, v0)
+            held.append((hold, float(z0[0])))
+            C = fit(effects, z0, v0)
+            C.result.phi, C.val = 3500.0, np.asarray(closed_val, float)
+            return C
+
+        sel.fit = fit_held
+        M = fit([], 0, 0)
+        trial = Trial(A, 1.0, model=fit([A], 0, 0))
+        sel._judge_all(M, [trial])
+        assert trial.passed is named
+        assert held == ([(("backlash:m",), pytest.approx(1e-6))] if asked else [])
+        if asked:
+            assert ("the band is not shown" in trial.note) is not named
+
+
 def test_a_delay_shorter_than_one_physics_step_is_judged_again_at_a_finer_step():
     """``Selector._within_one_step``: a delay of 0.4 samples (1 ms samples, 1 ms physics steps)
     that halves the validation error far above every floor is still what an integrator's phase
