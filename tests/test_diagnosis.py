@@ -598,6 +598,30 @@ def test_the_case_lists_keep_their_seeds_apart_and_the_test_lists_frozen():
             assert json.load(f)["fingerprint"] == cases.fingerprint(listed), frozen
 
 
+def test_segments_both_models_predict_within_the_noise_do_not_dilute_the_paired_test():
+    """``Selector._judge``: a 3 s PRBS recording's validation segments, 3 with a command switch the
+    model before misses by far and 7 at rest that both models predict far within the data's
+    precision (ties). A delay that predicts the 3 near perfectly is consistent evidence; with the
+    ties in the paired test it had t = 1.99. Left out (while 3 or more segments remain), it
+    passes; a candidate worse on one of the 3 does not, and with fewer than 3 told apart every
+    segment counts."""
+    sel, fit = _selector({frozenset(): (5000.0, np.zeros(10))})
+    M = fit([], 0, 0)                        # 100 residuals per segment: the tie level is 2
+    rest = np.array([0.16, 0.04, 0.22, 1.38, 0.03, 0.07, 0.06])
+    base = np.concatenate([[24874.0, 25438.0, 25105.0], rest])
+    delay = np.concatenate([[0.033, 0.039, 0.044], [0.048, 0.031, 0.028, 0.041, 0.029, 0.026, 0.033]])
+    assert select._paired_t(base - delay) < 2                        # every segment: diluted
+    ratio, t = sel._judge(M, base, delay)
+    assert ratio < 1e-5 and t > 100
+    worse_on_one = delay.copy()
+    worse_on_one[2] = 3e5
+    assert sel._judge(M, base, worse_on_one)[1] < 2
+    two = base.copy()
+    two[2] = 1.0                             # only 2 segments told apart: all 10 count
+    assert sel._judge(M, two, delay)[1] == pytest.approx(
+        max(select._paired_t(two - delay), select._paired_t(np.log((two + 10) / (delay + 10)))))
+
+
 def test_a_band_fitted_at_the_bottom_of_its_range_must_beat_its_band_closed():
     """``SelectConfig.band_shown``: a backlash that passes with its width at the bottom of its range
     is fitted again with the band closed (the width held near 0, the motor side kept): where that
