@@ -22,7 +22,10 @@ tuned on before it is kept. It is not part of the frozen list (its fingerprint i
 and payloads were the kinds the diagnosis missed most on both tuning lists: every system's
 backlash and payload targets, twice each, by the same designs and magnitudes.
 ``pair_cases()`` is a fourth tuning list (seeds 3500 and up, split ``pairs``): a backlash and a
-Coulomb friction on the same joint, on every system that can have both.
+Coulomb friction on the same joint, on every system that can have both. ``servo_cases()``,
+``beside_cases()``, ``timing_cases()`` (every system's action delay) and ``combos_cases()`` (every
+pair of kinds but backlash + friction on every system; seeds 6000 and up, past the fresh list's)
+are the fifth to eighth tuning lists.
 ``build_cases(fresh=True)`` is a second *test* list (seeds 4000 and up, split ``fresh``), drawn by
 the same recipe on 2026-11-28 and frozen (``results/diagnosis_independent/cases_fresh_frozen.json``)
 before it was run once: the first test half had been looked at thirty times by then, and a

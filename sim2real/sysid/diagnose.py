@@ -88,8 +88,9 @@ class DiagnoseConfig:
         (``SelectConfig``).
       band_scan: after a backlash's fits, this many widths over its range are simulated together
         and the fit is started again from one that fits better (0: off; ``SelectConfig``).
-      band_shown: a backlash is named only if its band passes against the same fit with the
-        band closed and the motor side kept (``SelectConfig``).
+      band_shown: a backlash whose fit shrank its width to the bottom of its range is named only
+        if its band passes against the same fit with the band closed and the motor side kept
+        (``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
