@@ -484,8 +484,7 @@ def build_cases(extra: bool = False, fresh: bool = False) -> list[Case]:
         kinds = {}
         for e, t in app:
             kinds.setdefault(e, []).append(t)
-        combos = COMBOS
-        for a, b in combos:
+        for a, b in COMBOS:
             if a in kinds and b in kinds:
                 ta = kinds[a][0]
                 tb = kinds[b][-1] if a == b else kinds[b][0]
@@ -615,8 +614,8 @@ def combos_cases() -> list[Case]:
         kinds: dict[str, list[str]] = {}
         for e, t in applicable(sysm):
             kinds.setdefault(e, []).append(t)
-        for a, b in COMBOS[:-1]:
-            if a not in kinds or b not in kinds or (a == b and len(kinds[a]) < 2):
+        for a, b in COMBOS:
+            if "backlash" in (a, b) or a not in kinds or b not in kinds or (a == b and len(kinds[a]) < 2):
                 continue
             for ma, mb in ((1, 2), (2, 1)):
                 if a == b:

@@ -234,12 +234,16 @@ def band_starts(points: list, n: int) -> list:
     return sorted(per_width.values(), key=lambda x: x[0])[:n]
 
 
+def _at_bottom(c: Candidate, v: float) -> bool:
+    """``v`` (the candidate's first parameter) ended at the bottom of its search range."""
+    return v <= 1.02 * c.search[0][0]
+
+
 def _at_edge(c: Candidate, v: float) -> bool:
     """``v`` (the candidate's first parameter) ended at the edge of its search range that widening
     moves: the top for timing effects and backlash, the bottom for a saturation."""
-    lo, hi = c.search[0]
-    return ((c.effect in ("motor_lag", "action_delay", "backlash") and v >= 0.98 * hi)
-            or (c.effect == "actuator_saturation" and v <= 1.02 * lo))
+    return ((c.effect in ("motor_lag", "action_delay", "backlash") and v >= 0.98 * c.search[0][1])
+            or (c.effect == "actuator_saturation" and _at_bottom(c, v)))
 
 
 class Selector:
@@ -612,7 +616,7 @@ class Selector:
                 t.note = (t.note + "; " if t.note else "") + note
             c = t.candidate
             if (t.passed and c.effect == "backlash" and self.cfg.band_shown
-                    and float(t.model.z[self.spec.index(c.params[0])]) <= 1.02 * c.search[0][0]):
+                    and _at_bottom(c, float(t.model.z[self.spec.index(c.params[0])]))):
                 self._band_shown(t)
 
     def _band_shown(self, trial: Trial) -> None:
@@ -627,7 +631,7 @@ class Selector:
         closed = self.fit(C.effects, z0, C.result.v0, hold=(width,))
         self.validate([closed])
         ratio, t = self._judge(closed, closed.val, C.val)
-        ok = closed.result.phi > C.result.phi and ratio <= 1 - self.cfg.min_gain and t >= self.cfg.min_t
+        ok = closed.result.phi > C.result.phi and self._passes(ratio, t)
         trial.passed = ok
         why = f"against its band closed (the motor side kept): ratio {ratio:.3f}, t = {t:.1f}"
         trial.note = "; ".join(x for x in (trial.note, why if ok else why + ": the band is not shown") if x)
