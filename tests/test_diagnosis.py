@@ -62,8 +62,8 @@ def test_geom_masses_position_servo_slow_log_and_late_clock(tmp_path):
 
 def test_payload_needs_no_site(tmp_path):
     """A 0.24 kg payload at the tip of a 2-link arm's lower link; the model has no sites.
-    (The same arm under PD control is a known miss: the nominal re-fit moves the upper link's
-    mass sixfold and the payload fit cannot leave that minimum -- see the README's failures.)"""
+    (The same arm under PD control was a known miss before ``mass_above``: the nominal re-fit
+    moved the upper link's mass sixfold and the payload fit could not leave that minimum.)"""
     design = cases.Design("Euler", 0.001, "geom", 200.0, 8.0, "multisine", 3e-4, 0.0, True)
     case = cases.Case(9002, "arm2", "single", (("mass_offset", "lower", 2),), design=design)
     d, out = _run(tmp_path, case)
@@ -145,6 +145,29 @@ def test_noise_estimate_gaussian_and_quantised():
     windows = [choose_window(x, noise_std(x), 0.002) for x in
                (fast + 1e-3 * rng.standard_normal(fast.shape), fast + 1e-2 * rng.standard_normal(fast.shape))]
     assert windows[0] < windows[1]
+
+
+def test_a_mass_refitted_past_its_limit_leaves_the_rest_to_a_payload(tmp_path):
+    """``DiagnoseConfig.mass_above``: on a horizontal 2-link arm (the SCARA) a point mass at the
+    inner link's tip adds only to the one inertia term the inner link's mass scale also sets, so
+    without a limit the nominal re-fit takes the payload up whole and none is named. Held to 2x
+    the model's mass, the re-fit stops there and the payload takes the rest; the report says the
+    mass ended at its limit. The limit applies only where payloads are searched."""
+    from sim2real.sysid.system import System
+
+    design = cases.Design("implicitfast", 0.001, "geom", 1000.0, 5.0, "chirp", 3e-4, 0.0, True)
+    case = cases.Case(9010, "scara", "single", (("mass_offset", "inner", 2),), design=design)
+    d0, _ = _run(tmp_path / "free", case, mass_above=0)
+    assert _named(d0) == [] and d0["nominal_refit"]["mass:inner"]["fitted"] > 2 * 0.8
+    d, _ = _run(tmp_path, case)
+    assert _named(d) == [("mass_offset", "inner")]
+    assert d["nominal_refit"]["mass:inner"]["fitted"] <= 2 * 0.8 * (1 + 1e-6)
+    assert any("re-fitted at their limit" in n and "mass:inner" in n for n in d["notes"])
+    xml = str(tmp_path / "case" / "nominal.xml")
+    assert System(xml, mass_above=2.0).spec["mass:inner"].high == pytest.approx(1.6)
+    assert System(xml).spec["mass:inner"].high == pytest.approx(800.0)      # the mass kind's own bound
+    with pytest.raises(ValueError, match="mass_above"):
+        DiagnoseConfig(model=xml, recordings=("a.csv",), mass_above=0.5).check()
 
 
 def test_masses_refitted_far_from_the_model_are_reported():

@@ -14,6 +14,8 @@ at 10 iterations.
 """
 from __future__ import annotations
 
+import dataclasses
+
 import os
 
 import mujoco
@@ -86,10 +88,14 @@ class System:
         friction loss; actuator gains anchor the force scale and stay as declared).
       substeps, h: physics steps per sample and their length (s).
       notes: what was changed to simulate the model, in words.
+
+    ``mass_above``: a body's re-fitted mass may rise to this many times the model's (0: to the
+    mass kind's own bound, 1e3 times); the diagnosis sets it where a payload is searched
+    (``DiagnoseConfig.mass_above``).
     """
 
     def __init__(self, xml_path: str, dt: float | None = None, coulomb_eps: float = 1e-3, max_delay: int = 8,
-                 refit_gains: bool = False, substeps: int | None = None):
+                 refit_gains: bool = False, substeps: int | None = None, mass_above: float = 0.0):
         m = _load(xml_path)
         self.xml_path = xml_path
         self.notes: list[str] = []
@@ -103,6 +109,8 @@ class System:
         self.bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody)
         moving = [b for b in range(1, m.nbody) if m.body_mass[b] > 0 and self._moves(m, b)]
         params: list[Param] = catalog.body_mass_params(m, moving)
+        if mass_above:
+            params = [dataclasses.replace(p, high=mass_above * p.default) for p in params]
         declared_fl = {}
         for j in range(m.njnt):
             d = float(m.dof_damping[m.jnt_dofadr[j]])
