@@ -15,7 +15,6 @@ at 10 iterations.
 from __future__ import annotations
 
 import dataclasses
-
 import os
 
 import mujoco
