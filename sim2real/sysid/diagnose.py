@@ -15,6 +15,7 @@ is complete, and only if ``out`` is a folder sim2real made (``sim2real.common.ou
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 import os
@@ -455,8 +456,10 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         dt = train[0].dt
         check_sample_rate(held, dt, "the training recordings")
         max_delay = max(16, int(math.ceil(0.12 / dt)))
-        mass_above = cfg.mass_above if "mass_offset" in cfg.effects else 0.0
-        system = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay, mass_above=mass_above)
+        # every System of this diagnosis (the chosen physics step's, a finer step's) alike
+        build = functools.partial(System, cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay,
+                                  mass_above=cfg.mass_above if "mass_offset" in cfg.effects else 0.0)
+        system = build()
         unknown = [t for t in cfg.targets if t not in {*system.joints, *system.actuators, *system.bodies}]
         if unknown:  # (before any simulation: a misspelt name costs nothing)
             raise ValueError(f"targets: {unknown} name no joint, actuator or body of {cfg.model} (joints: "
@@ -481,8 +484,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         n = choose_substeps(system, trajs[: len(train)])
         if n != system.substeps:
             kept = system.notes  # (what was found about the data so far)
-            system = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay, substeps=n,
-                            mass_above=mass_above)
+            system = build(substeps=n)
             system.notes += [x for x in kept if x not in system.notes]
         bar.step(text="choosing the prediction horizon")
         H = (int(round(cfg.horizon_seconds / dt)) if cfg.horizon_seconds > 0 else choose_horizon(system, trajs))
@@ -533,8 +535,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         def finer(k: int):
             """The same segments simulated with a physics step ``k`` times shorter (built only when
             a candidate is blocked by the step's floor alone): their fitter."""
-            fine = System(cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay,
-                          substeps=system.substeps * k, mass_above=mass_above)
+            fine = build(substeps=system.substeps * k)
             sh_f = Shooting(fine, trajs, H, heldout=heldout_idx, val_fraction=cfg.val_fraction)
             f_fine = Fitter(sh_f, fitter.scales, refine_iters=fitter.refine_iters)
             if rough_any:  # the same segments: their refined start velocities
@@ -871,9 +872,9 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     if far:
         notes.append(far)
     capped = [f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g} {r['unit']}" for n, r in nominal_refit.items()
-              if n.startswith("mass:") and r["fitted"] >= 0.999 * spec[n].high and spec[n].high < 1e3 * spec[n].default]
+              if system.mass_above and n.startswith("mass:") and r["fitted"] >= 0.999 * spec[n].high]
     if capped:
-        notes.append("re-fitted at their limit, " + f"{cfg.mass_above:g}x the model's (`mass_above`): "
+        notes.append("re-fitted at their limit, " + f"{system.mass_above:g}x the model's (`mass_above`): "
                      + ", ".join(capped) + " -- more than a model's masses are usually off by; the rest the data "
                      "asks of these bodies is left to a payload on them (named above where one passed)")
     # the mismatch before any fit: where the nominal model's predictions and forces are wrong

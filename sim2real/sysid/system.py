@@ -87,16 +87,16 @@ class System:
         friction loss; actuator gains anchor the force scale and stay as declared).
       substeps, h: physics steps per sample and their length (s).
       notes: what was changed to simulate the model, in words.
-
-    ``mass_above``: a body's re-fitted mass may rise to this many times the model's (0: to the
-    mass kind's own bound, 1e3 times); the diagnosis sets it where a payload is searched
-    (``DiagnoseConfig.mass_above``).
+      mass_above: a body's re-fitted mass may rise to this many times the model's (0: to the
+        mass kind's own bound, 1e3 times); the diagnosis sets it where a payload is searched
+        (``DiagnoseConfig.mass_above``).
     """
 
     def __init__(self, xml_path: str, dt: float | None = None, coulomb_eps: float = 1e-3, max_delay: int = 8,
                  refit_gains: bool = False, substeps: int | None = None, mass_above: float = 0.0):
         m = _load(xml_path)
         self.xml_path = xml_path
+        self.mass_above = float(mass_above)
         self.notes: list[str] = []
         check_model(m, xml_path)
         self.columns = ModelColumns(m, xml_path)
