@@ -170,6 +170,22 @@ def test_a_mass_refitted_past_its_limit_leaves_the_rest_to_a_payload(tmp_path):
         DiagnoseConfig(model=xml, recordings=("a.csv",), mass_above=0.5).check()
 
 
+def test_a_force_limit_behind_a_delay_is_fitted_from_half_the_delay(tmp_path):
+    """``SelectConfig.timing_restart``: a linear axis with a 8.3 ms delay and a force limit, 3 s of
+    PRBS. Fitted alone, the delay takes up the limit's slowing too (14 ms), and on top of it the
+    limit's fit stays where the delay leaves no room for it; from half the delay both are found,
+    the delay near the plant's."""
+    design = cases.Design("Euler", 0.0005, "inertial", 1000.0, 3.0, "prbs", 1e-5, 0.0, False)
+    case = cases.Case(9014, "linear_axis", "double", (("action_delay", "", 1), ("actuator_saturation", "drive", 2)),
+                      design=design)
+    d0, _ = _run(tmp_path / "off", case, timing_restart=0)
+    assert _named(d0) == [("action_delay", "")] and d0["selected"][0]["params"]["action_delay_seconds"] > 0.012
+    d, _ = _run(tmp_path, case)
+    assert _named(d) == [("action_delay", ""), ("actuator_saturation", "drive")]
+    assert d["selected"][0]["params"]["action_delay_seconds"] == pytest.approx(0.0083, rel=0.25)
+    assert any("the model's action_delay" in c.get("note", "") for r in d["rounds"] for c in r["candidates"])
+
+
 def test_masses_refitted_far_from_the_model_are_reported():
     """A mass >10x or <0.1x the model's (KUKA LWR4+: link 1 at 70 kg) gets a note; damping does not."""
     refit = {"mass:l1": {"nominal": 2.7, "fitted": 70.2, "unit": "kg"},

@@ -100,6 +100,9 @@ class DiagnoseConfig:
       band_shown: a backlash whose fit shrank its width to the bottom of its range is named only
         if its band passes against the same fit with the band closed and the motor side kept
         (``SelectConfig``).
+      timing_restart: on top of a named delay or lag, other candidates are also fitted from the
+        delays and lags scaled by this factor, that fit kept where it halves the training
+        objective (0: off; ``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
@@ -162,6 +165,7 @@ class DiagnoseConfig:
     backlash_starts: int = SelectConfig.backlash_starts
     band_scan: int = SelectConfig.band_scan
     band_shown: bool = SelectConfig.band_shown
+    timing_restart: float = SelectConfig.timing_restart
     refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
@@ -566,7 +570,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                     max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer,
                                     plausible_masses=cfg.plausible_masses, geared=cfg.geared,
                                     backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan,
-                                    band_shown=cfg.band_shown),
+                                    band_shown=cfg.band_shown, timing_restart=cfg.timing_restart),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
                        allowed=cfg.expressible or None)
         final, steps = sel.run()
