@@ -186,6 +186,21 @@ def test_a_force_limit_behind_a_delay_is_fitted_from_half_the_delay(tmp_path):
     assert any("the model's action_delay" in c.get("note", "") for r in d["rounds"] for c in r["candidates"])
 
 
+def test_a_force_limit_far_below_its_grid_is_reached_by_the_widened_search(tmp_path):
+    """``Candidate.widen``: a saturation's grid is sized by the nominal model's forces, and an
+    integrating servo whose limit binds winds up in the nominal model and asks for far more (the
+    beside list's 3846: a limit of 0.086 under a grid from 2.3). A fit that ends at the grid's
+    bottom is fitted again from starts down to 1/64 of it; from that bottom alone it stayed
+    there, and a payload on the bar was named instead."""
+    case = {c.seed: c for c in cases.split_cases("beside")}[3846]
+    d, _ = _run(tmp_path, case)
+    true = json.load(open(tmp_path / "case" / "truth.json"))["truth_values"]["actuator_saturation@iservo"]
+    assert _named(d) == [("actuator_saturation", "iservo")]
+    assert d["selected"][0]["params"]["saturation:iservo"] == pytest.approx(true["saturation:iservo"], rel=0.25)
+    (c,) = [c for c in d["rounds"][0]["candidates"] if c["effect"] == "actuator_saturation"]
+    assert "searched wider" in c["note"]
+
+
 def test_masses_refitted_far_from_the_model_are_reported():
     """A mass >10x or <0.1x the model's (KUKA LWR4+: link 1 at 70 kg) gets a note; damping does not."""
     refit = {"mass:l1": {"nominal": 2.7, "fitted": 70.2, "unit": "kg"},

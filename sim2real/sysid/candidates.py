@@ -43,6 +43,7 @@ from sim2real.physics import kinds
 _GROUPS = (kinds.JOINT, kinds.BODY, "", kinds.ACTUATOR)
 EFFECTS = ("none",) + tuple(k.effect for g in _GROUPS for k in kinds.offering(g, default_only=True))
 """What the diagnosis searches by default."""
+SAT_WIDEN = 64  # a saturation that ends at the bottom of its range is searched down to this much lower (``Candidate.widen``)
 ALL_EFFECTS = ("none",) + tuple(k.effect for g in _GROUPS for k in kinds.offering(g))
 """Everything it can search (``effects=[...]`` may add the rest, e.g. ``quadratic_drag``)."""
 
@@ -85,8 +86,13 @@ class Candidate:
         lo, hi = self.search[0]
         pts = [g[0] for g in self.grid]
         if self.effect == "actuator_saturation":  # a limit below the lowest grid point
-            new = tuple((v,) + g[1:] for v, g in zip(np.geomspace(lo / 4, lo, 4), [self.grid[0]] * 4))
-            return dataclasses.replace(self, grid=new, search=((lo / 4, hi),) + self.search[1:])
+            # the grid is sized by the nominal model's forces, and where the limit binds the
+            # nominal servo asks for far more than it (an integrating one winds up): the beside
+            # list's 3846, a 0.086 limit under a grid from 2.3, fitted at 0.099 from any start
+            # in [lo/64, lo/2] and not from lo itself (``tuning.md`` step 74). These are the
+            # widened fit's starts (``Selector._try``).
+            new = tuple((v,) + g[1:] for v, g in zip(np.geomspace(lo / SAT_WIDEN, lo / 2, 4), [self.grid[0]] * 4))
+            return dataclasses.replace(self, grid=new, search=((lo / SAT_WIDEN, hi),) + self.search[1:])
         top = max(pts)
         new = tuple((v,) + self.grid[0][1:] for v in np.geomspace(top * 1.5, top * 4, 3))
         return dataclasses.replace(self, grid=new, search=((lo, hi * 4),) + self.search[1:])

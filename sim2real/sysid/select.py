@@ -603,6 +603,13 @@ class Selector:
         if _at_edge(c, v):
             wide = c.widen()
             C2 = self.fit(M.effects + [wide], C.z.copy(), C.result.v0)
+            if c.effect == "actuator_saturation":  # a limit far below: the fit from the edge stays there
+                for g in wide.grid:
+                    z = C.z.copy()
+                    z[self.spec.index(c.params[0])] = g[0]
+                    C3 = self.fit(M.effects + [wide], z, C.result.v0)
+                    if C3.result.phi < C2.result.phi:
+                        C2 = C3
             trial.note = "; ".join(x for x in (trial.note, f"{c.params[0]} ended at the edge of its range ({v:.4g}); "
                                                            "searched wider") if x)
             if C2.result.phi < C.result.phi:

@@ -5,9 +5,18 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(
 from compare_all import compare, fromlogs, STEP69, STEP70, R
 from sets import logs as MASSCAP
 
-step72 = {c: (r['named'], r['correct'])
+STEP72 = {c: (r['named'], r['correct'])
           for paths in MASSCAP.values() for c, r in fromlogs([R + 'masscap/' + p for p in paths]).items()}
-runs = {}
-for log in sys.argv[1:]:
-    runs.setdefault(os.path.basename(log)[:-4], []).append(log)
-compare(runs, {**STEP69, **STEP70, **step72})
+STEP73 = {'6098_linear_axis_action_delay+actuator_saturation@drive': ('action_delay + actuator_saturation@drive', 'True')}
+
+
+def by_list(paths):
+    """{list: [log paths]} from logs named <list>[_anything].log"""
+    runs = {}
+    for log in paths:
+        runs.setdefault(os.path.basename(log)[:-4].split('_')[0], []).append(log)
+    return runs
+
+
+if __name__ == '__main__':
+    compare(by_list(sys.argv[1:]), {**STEP69, **STEP70, **STEP72})
