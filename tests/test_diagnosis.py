@@ -184,6 +184,9 @@ def test_a_force_limit_behind_a_delay_is_fitted_from_half_the_delay(tmp_path):
     assert _named(d) == [("action_delay", ""), ("actuator_saturation", "drive")]
     assert d["selected"][0]["params"]["action_delay_seconds"] == pytest.approx(0.0083, rel=0.25)
     assert any("the model's action_delay" in c.get("note", "") for r in d["rounds"] for c in r["candidates"])
+    for bad in (1.0, -0.5, float("nan")):
+        with pytest.raises(ValueError, match="timing_restart"):
+            DiagnoseConfig(model="m.xml", recordings=("a.csv",), timing_restart=bad).check()
 
 
 def test_a_force_limit_far_below_its_grid_is_reached_by_the_widened_search(tmp_path):

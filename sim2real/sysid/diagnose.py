@@ -193,6 +193,8 @@ class DiagnoseConfig:
             raise ValueError("coulomb_eps must be > 0")
         if not (self.mass_above == 0 or (math.isfinite(self.mass_above) and self.mass_above >= 1)):
             raise ValueError(f"mass_above={self.mass_above}: must be 0 (no limit) or a factor >= 1")
+        if not (self.timing_restart == 0 or 0 < self.timing_restart < 1):
+            raise ValueError(f"timing_restart={self.timing_restart}: must be 0 (off) or a factor between 0 and 1")
         if self.finer < 0:
             raise ValueError(f"finer={self.finer}: must be >= 0 (0: off)")
         if self.band_scan == 1 or self.band_scan < 0:
