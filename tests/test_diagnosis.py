@@ -1131,7 +1131,7 @@ def test_a_servo_at_its_force_limit_is_fitted_with_the_models_mass(tmp_path):
     assert sel["effect"] == "actuator_saturation" and "masses held at the model's" in sel["note"]
     # 0.1% off before step 74; 7% since: its wider search of the first fit (from starts 64x
     # below the grid) ends in a fit that predicts the held-out data 7.5x better (NRMSE 0.0020
-    # against 0.0148), the limit a little higher beside the re-fitted damping
+    # against 0.0148) with the limit a little higher
     assert sel["params"]["saturation:drive"] == pytest.approx(true, rel=0.1)
     assert d["nominal_refit"]["mass:carriage"]["std"] is None  # (held, and the report says so)
     assert "| `mass:carriage` | 5 | " in open(tmp_path / "diag" / "report.md").read() and "| held |" in open(
