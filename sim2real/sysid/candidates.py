@@ -43,9 +43,9 @@ from sim2real.physics import kinds
 _GROUPS = (kinds.JOINT, kinds.BODY, "", kinds.ACTUATOR)
 EFFECTS = ("none",) + tuple(k.effect for g in _GROUPS for k in kinds.offering(g, default_only=True))
 """What the diagnosis searches by default."""
-SAT_WIDEN = 64  # a saturation that ends at the bottom of its range is searched down to this much lower (``Candidate.widen``)
 ALL_EFFECTS = ("none",) + tuple(k.effect for g in _GROUPS for k in kinds.offering(g))
 """Everything it can search (``effects=[...]`` may add the rest, e.g. ``quadratic_drag``)."""
+SAT_WIDEN = 64  # a saturation that ends at the bottom of its range is searched down to this much lower (``Candidate.widen``)
 
 
 @dataclasses.dataclass(frozen=True)

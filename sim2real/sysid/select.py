@@ -577,10 +577,11 @@ class Selector:
         """Fit the candidate on top of ``M`` (validation comes later, batched: ``_judge_all``)."""
         c = trial.candidate
 
-        def fit_from(start, base):
+        def fit_from(start, base, cand=c):
             z0 = base[0].copy()
-            z0[self.spec.indices(list(c.params))] = np.clip(start, [r[0] for r in c.search], [r[1] for r in c.search])
-            return self.fit(M.effects + [c], z0, base[1])
+            z0[self.spec.indices(list(cand.params))] = np.clip(start, [r[0] for r in cand.search],
+                                                               [r[1] for r in cand.search])
+            return self.fit(M.effects + [cand], z0, base[1])
 
         C = fit_from(trial.start, getattr(trial, "base", (M.z, M.result.v0)))
         for start, base in trial.others:  # other widths of the grid: the band's fit is local
@@ -605,9 +606,7 @@ class Selector:
             C2 = self.fit(M.effects + [wide], C.z.copy(), C.result.v0)
             if c.effect == "actuator_saturation":  # a limit far below: the fit from the edge stays there
                 for g in wide.grid:
-                    z = C.z.copy()
-                    z[self.spec.index(c.params[0])] = g[0]
-                    C3 = self.fit(M.effects + [wide], z, C.result.v0)
+                    C3 = fit_from(g, (C.z, C.result.v0), wide)
                     if C3.result.phi < C2.result.phi:
                         C2 = C3
             trial.note = "; ".join(x for x in (trial.note, f"{c.params[0]} ended at the edge of its range ({v:.4g}); "
