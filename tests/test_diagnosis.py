@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from sim2real.sysid import select
-from sim2real.sysid.diagnose import DiagnoseConfig, diagnose, far_masses, relative_change
+from sim2real.sysid.diagnose import DiagnoseConfig, diagnose, far_masses, force_scale, relative_change
 from sim2real.sysid.trajectory import choose_window, noise_std
 
 # every test here runs a diagnosis: thousands of simulated segments (see conftest.py)
@@ -214,6 +214,35 @@ def test_masses_refitted_far_from_the_model_are_reported():
     assert "mass:l1 2.7 -> 70.2 kg (x26)" in note and "mass:l2" in note
     assert "mass:l3" not in note and "damping" not in note
     assert far_masses({"mass:l3": refit["mass:l3"]}) is None
+
+
+def test_a_force_limit_below_every_command_is_reported_as_a_force_scale(tmp_path):
+    """The beside list's 3829: a cart-pole under a PRBS of +-0.05 against a force limit of 0.0375
+    moves exactly as one whose every mass and damping is 1/0.75 of the model's. Nothing is named
+    (the data cannot tell the limit from heavier bodies), and the report says what the common
+    factor means: the actuator delivers 75% of the model's force."""
+    case = {c.seed: c for c in cases.split_cases("beside")}[3829]
+    d, out = _run(tmp_path, case)
+    assert d["answer"] == "none"
+    fs = d["force_scale"]
+    assert fs["factor"] == pytest.approx(0.05 / 0.0375, rel=0.1)
+    assert set(fs["ratios"]) == {"mass:cart", "mass:pole", "damping:slider", "damping:hinge"}
+    assert "delivering 7" in open(out / "report.md").read()
+
+
+def test_a_force_scale_needs_every_mass_and_damping_moved_alike():
+    """``force_scale``: one common factor over three or more masses, dampings and frictions (two of
+    them masses), at least x1.2 off, each within x1.1 of it; not without an actuator."""
+    def refit(**ratios):
+        return {n.replace("_", ":", 1): {"nominal": 2.0, "fitted": 2.0 * r} for n, r in ratios.items()}
+    alike = refit(mass_a=1.3, mass_b=1.4, damping_a=1.35)
+    assert force_scale(alike, True)["factor"] == pytest.approx((1.3 * 1.4 * 1.35) ** (1 / 3))
+    assert force_scale(refit(mass_a=0.7, mass_b=0.75, coulomb_a=0.72), True)["factor"] < 1
+    assert force_scale(alike, False) is None                                   # no actuator: no anchor
+    assert force_scale(refit(mass_a=1.3, damping_a=1.3), True) is None         # two are no pattern
+    assert force_scale(refit(mass_a=1.3, damping_a=1.3, damping_b=1.3), True) is None  # one mass
+    assert force_scale(refit(mass_a=1.1, mass_b=1.12, damping_a=1.1), True) is None    # too near 1
+    assert force_scale(refit(mass_a=1.3, mass_b=1.6, damping_a=1.35), True) is None    # not alike
 
 
 def test_of_two_passing_effects_the_one_with_plausible_masses_joins():

@@ -227,6 +227,45 @@ def far_mass_list(nominal_refit: dict) -> list[str]:
             for n, r in nominal_refit.items() if n.startswith("mass:") and is_far_mass(r["nominal"], r["fitted"])]
 
 
+# A force scale is what the recordings fix least well: scaling every mass, damping and friction
+# together leaves the motion under the same commands unchanged only if the actuators' force scales
+# too, so a re-fit that moves them all by one factor says the model's forces are off by it.
+SCALE_OFF = 0.2     # the common factor is at least this far from 1 (x1.2 or x1/1.2) ...
+SCALE_SPREAD = 0.1  # ... and every ratio lies within this of it (x1.1 either way)
+
+
+def force_scale(nominal_refit: dict, actuated: bool) -> dict | None:
+    """``{"factor": k, "ratios": {name: fitted / nominal}}`` where the re-fit moved every body mass,
+    declared damping and declared friction by one common factor ``k`` (``SCALE_OFF``,
+    ``SCALE_SPREAD``; at least three of them, two of them masses, so that a coincidence of two is not
+    read as a pattern), on a model with actuators (without one nothing anchors the scale and the
+    re-fit says so as unidentified); else None. The motion is then that of actuators delivering
+    ``1 / k`` of the model's force (``tuning.md`` step 75: the beside list's 3829, a cart-pole
+    under a PRBS of +-0.05 against a force limit of 0.0375, re-fitted every mass and damping
+    x1.30-1.43 and named nothing; on every stored tuning-list diagnosis the pattern occurs there only)."""
+    ratios = {n: r["fitted"] / r["nominal"] for n, r in nominal_refit.items()
+              if n.split(":")[0] in ("mass", "damping", "coulomb") and r["nominal"] > 0}
+    if (not actuated or len(ratios) < 3 or sum(n.startswith("mass:") for n in ratios) < 2
+            or min(ratios.values()) <= 0):
+        return None
+    logs = np.log(list(ratios.values()))
+    k = float(np.exp(np.mean(logs)))
+    if abs(math.log(k)) < math.log(1 + SCALE_OFF) or np.any(np.abs(logs - np.mean(logs)) > math.log(1 + SCALE_SPREAD)):
+        return None
+    return {"factor": k, "ratios": ratios}
+
+
+def force_scale_note(fs: dict) -> str:
+    k = fs["factor"]
+    return (f"every re-fitted mass, damping and friction moved by about one factor, x{k:.3g} ("
+            + ", ".join(f"{n} x{r:.3g}" for n, r in fs["ratios"].items())
+            + f"): the motion is that of actuators delivering {100 / k:.0f}% of the model's force -- a gain "
+            "(gear ratio, motor constant, amplifier) or a force limit below the commands (which commands of one "
+            "amplitude, as PRBS or steps, cannot tell from a gain). The actuator gains are held as declared to "
+            "anchor the scale: if they are uncertain, read these masses as relative; recordings at several "
+            "command amplitudes would tell a limit from a gain")
+
+
 def relative_change(before: float, after: float) -> str:
     """How people read a change of an error: '78% lower', '12% higher', '32x worse'."""
     if before <= 0 or not math.isfinite(before) or not math.isfinite(after):
@@ -877,6 +916,9 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     far = far_masses(nominal_refit)
     if far:
         notes.append(far)
+    scale = force_scale(nominal_refit, system.mj.nu > 0)
+    if scale:
+        notes.append(force_scale_note(scale))
     capped = [f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g} {r['unit']}" for n, r in nominal_refit.items()
               if system.mass_above and n.startswith("mass:") and r["fitted"] >= 0.999 * spec[n].high]
     if capped:
@@ -908,7 +950,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         "answer": answer, "selected": selected,
         "effects": rounds[0]["candidates"] if rounds else [], "rounds": rounds, "steps": step_rows,
         "indistinguishable": indistinguishable, "unconfirmed": unconfirmed, "nominal_refit": nominal_refit,
-        "unidentified": unidentified,
+        "unidentified": unidentified, "force_scale": scale,
         "correlation": _correlation(chosen.result),
         "mismatch": mismatch, "fit": fit, "fitted_params": fitted_params, "fitted_mjcf": fitted_mjcf,
         "notes": notes, "seconds": round(time.time() - t_start, 1), "simulator_calls": sh.calls,
