@@ -256,6 +256,7 @@ def force_scale(nominal_refit: dict, actuated: bool) -> dict | None:
 
 
 def force_scale_note(fs: dict) -> str:
+    """The report's words for a ``force_scale`` finding."""
     k = fs["factor"]
     return (f"every re-fitted mass, damping and friction moved by about one factor, x{k:.3g} ("
             + ", ".join(f"{n} x{r:.3g}" for n, r in fs["ratios"].items())

@@ -727,7 +727,8 @@ class Selector:
     def _pair(self, M: Model, tried: list[Trial]) -> tuple[Trial, Trial] | None:
         """When no single effect passes but one lowers the validation error (not consistently
         enough: a saturation that fixes the segments where it bites and costs where a missing
-        delay matters), every two of the fitted ones (``top``: up to 6 pairs) are fitted together;
+        delay matters), or one's fit takes up more than ``PAIR_TRAIN`` of the training objective
+        however it validates, every two of the fitted ones (``top``: up to 6 pairs) are fitted together;
         a candidate that alone predicts worse may be half of the answer (tuning half: a joint
         stiffness that only helps beside a sensor offset, the fourth of four alone). The
         pair joins the model if it passes the same test against ``M`` and lowers the validation
