@@ -2,7 +2,7 @@
 # of steps 72-74 and of spread_floor_not_kept, not committed) had nothing pass on the nominal model or a pair
 # joined together, or that has no stored diagnosis; prints the "list:only" words of sets.txt
 import json, glob, os, sys
-sys.path.insert(0,'/work/main/benchmarks')
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', '..'))  # benchmarks/
 import sysid_cases as C
 seen={}
 for root in ['/tmp/cap_work','/tmp/dev4','/tmp/dev1','/tmp/sat_work','/tmp/sf/d1']:
