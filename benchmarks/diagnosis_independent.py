@@ -75,19 +75,24 @@ def _param_errors(desc: dict, d: dict) -> dict[str, float]:
     return out
 
 
-def run_case(case: sysid_cases.Case, work: str, settings: dict | None = None) -> dict:
-    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
-
-    folder = os.path.join(work, case.label)
+def case_files(case: sysid_cases.Case, folder: str) -> dict:
+    """The case's recordings and ``truth.json`` in ``folder`` (made again unless those there are of
+    this case's design and this generator's version); returns the truth's description."""
     desc_path = os.path.join(folder, "truth.json")
     if os.path.exists(desc_path):
         with open(desc_path) as f:
             desc = json.load(f)
-        if (desc.get("design") != dataclasses.asdict(case.design)
-                or desc.get("generator_version") != sysid_cases.GENERATOR_VERSION):
-            desc = sysid_cases.generate(case, folder)
-    else:
-        desc = sysid_cases.generate(case, folder)
+        if (desc.get("design") == dataclasses.asdict(case.design)
+                and desc.get("generator_version") == sysid_cases.GENERATOR_VERSION):
+            return desc
+    return sysid_cases.generate(case, folder)
+
+
+def run_case(case: sysid_cases.Case, work: str, settings: dict | None = None) -> dict:
+    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
+
+    folder = os.path.join(work, case.label)
+    desc = case_files(case, folder)
     row = {"case": case.label, "seed": case.seed, "split": case.split, "kind": case.kind, "system": case.system,
            "truth": " + ".join(sorted(truth_keys(case))) or "none",
            **{f"design_{k}": v for k, v in dataclasses.asdict(case.design).items()}}
