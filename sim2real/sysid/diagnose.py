@@ -103,6 +103,9 @@ class DiagnoseConfig:
       timing_restart: on top of a named delay or lag, other candidates are also fitted from the
         delays and lags scaled by this factor, that fit kept where it halves the training
         objective (0: off; ``SelectConfig``).
+      freeze_at_noise: a fit's steps leave put only the directions the data's noise leaves
+        undetermined (false: also those the start's own misfit does, as before ``tuning.md``
+        step 77; ``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
@@ -166,6 +169,7 @@ class DiagnoseConfig:
     band_scan: int = SelectConfig.band_scan
     band_shown: bool = SelectConfig.band_shown
     timing_restart: float = SelectConfig.timing_restart
+    freeze_at_noise: bool = SelectConfig.freeze_at_noise
     refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
@@ -612,7 +616,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                     max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer,
                                     plausible_masses=cfg.plausible_masses, geared=cfg.geared,
                                     backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan,
-                                    band_shown=cfg.band_shown, timing_restart=cfg.timing_restart),
+                                    band_shown=cfg.band_shown, timing_restart=cfg.timing_restart,
+                                    freeze_at_noise=cfg.freeze_at_noise),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
                        allowed=cfg.expressible or None)
         final, steps = sel.run()

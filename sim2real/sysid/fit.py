@@ -162,9 +162,18 @@ class Fitter:
         keep = w > max(sigma2, 1e-12) * 1.0
         return w, V, keep
 
-    def fit(self, z0, v0, names, tiles, iters: int = 6, tol: float = 1e-3, bounds=None) -> Result:
+    def fit(self, z0, v0, names, tiles, iters: int = 6, tol: float = 1e-3, bounds=None, at_noise: bool = False) -> Result:
         """Gauss-Newton / Levenberg-Marquardt from ``z0``; ``bounds``: ``{name: (lo, hi)}``
-        narrower than the physical ones (a search range)."""
+        narrower than the physical ones (a search range).
+
+        ``at_noise``: the steps leave put only the directions the data's *noise* leaves undetermined
+        (the residual variance taken as at most its noise level, 1 per residual, times the
+        correlation's inflation), not those the current misfit does. The standard errors are the
+        misfit's either way. A start far from the fit misfits by orders of magnitude more than the
+        noise, and measured against that misfit every direction but the steepest is "unidentified":
+        the fit never leaves its start (the combos list's 6127: a 0.05 rad sensor offset beside a
+        joint spring, fitted from its grid point 0.02 and left there, training objective 1.4e5
+        against 13 at the truth; ``tuning.md`` step 77)."""
         z = np.asarray(z0, np.float32).copy()
         v0 = np.asarray(v0, float).copy()
         idx = self.spec.indices(names) if names else np.zeros(0, int)
@@ -175,6 +184,10 @@ class Fitter:
                 lo[k], hi[k] = max(lo[k], bounds[n][0]), min(hi[k], bounds[n][1])
         r0 = self.residuals(z[None], v0[None], tiles)[0]
         phi = self.phi(r0, v0, tiles)
+
+        def held_below(sigma2, r):
+            """The variance under which a direction's curvature leaves it put (``at_noise``: the noise's)."""
+            return min(sigma2, self._correlation(r)) if at_noise else sigma2
         mu = 1e-3
         it = 0
         H = np.zeros((len(names), len(names)))
@@ -194,7 +207,7 @@ class Fitter:
             H, g, solve_v, _ = self._reduce(r0, J_t, J_v, v0, tiles)
             n = r0.size
             sigma2 = max(phi / max(n - len(names), 1), 1e-12) * self._correlation(r0)
-            w, V, keep = self._identifiable(H, sigma2)
+            w, V, keep = self._identifiable(H, held_below(sigma2, r0))
             trials = []
             for m in (mu * 0.1, mu, mu * 10.0):
                 # Levenberg-Marquardt in the identifiable subspace (the others stay put)
@@ -228,7 +241,8 @@ class Fitter:
         unidentified = []
         corr = None
         if len(names):
-            w, V, keep = self._identifiable(H, sigma2)
+            # (the directions the steps left put are those reported; the errors are the misfit's)
+            w, V, keep = self._identifiable(H, held_below(sigma2, r0))
             winv = np.where(keep, 1.0 / np.maximum(w, 1e-300), 0.0)
             cov = (V * winv) @ V.T * sigma2
             for k, nm in enumerate(names):

@@ -198,6 +198,9 @@ class SelectConfig:
         6022's, to wrong (a friction on top of a right delay, 0.982 from half of it, predicted the
         validation segments worse); every other restart that was kept fitted 0.72-0.99 of the first
         fit, but 3803's (0.26, its candidate failing either way). ``tuning.md`` step 73.
+      freeze_at_noise: every fit's steps leave put only the directions the data's noise leaves
+        undetermined, not those the start's own misfit does (``Fitter.fit``'s ``at_noise``;
+        ``tuning.md`` step 77).
     """
 
     min_gain: float = 0.05
@@ -219,6 +222,7 @@ class SelectConfig:
     band_scan: int = 12
     band_shown: bool = True
     timing_restart: float = 0.5
+    freeze_at_noise: bool = True
 
 
 TIMING = ("action_delay", "motor_lag")
@@ -309,7 +313,7 @@ class Selector:
         effect's inside its search range."""
         fitter.scales.update(self._scales(effects))
         bounds = {n: r for c in effects for n, r in zip(c.params, c.search)}
-        return fitter.fit(z0, v0, params, self.fit_tiles, iters=iters, bounds=bounds)
+        return fitter.fit(z0, v0, params, self.fit_tiles, iters=iters, bounds=bounds, at_noise=self.cfg.freeze_at_noise)
 
     def validate(self, models: list[Model]) -> None:
         """Each model's per-segment validation objective (velocities refined), simulated together."""
