@@ -162,9 +162,6 @@ class _Oracle:
                         if not (base is A.z and n in shared):
                             z0[sel.spec.index(n)] = v
                 T = sel.fit(cs, z0, N.result.v0)
-                if os.environ.get("CEILING_DEBUG"):
-                    print("  start", ["N", "file", "answer"][[id(N.z), id(sel.spec.default), id(A.z)].index(id(base))],
-                          combo, f"phi {T.result.phi:.5g}", {n: round(float(T.z[sel.spec.index(n)]), 4) for n in T.params})
                 if best is None or T.result.phi < best.result.phi:
                     best = T
         return best
@@ -227,7 +224,8 @@ class Settings:
     """split: which list (as ``diagnosis_independent.py``); results: a results folder of that list
     whose missed cases are checked (a name under ``benchmarks/results/diagnosis_independent/`` or a
     path); cases: instead, a file of case labels, one per line; work: where generated cases are
-    kept; out: where the table goes; tag: suffix of its name; jobs: processes."""
+    kept; out: where the table goes; tag: suffix of its name; jobs: processes; note: a line for the
+    test list's log (a run on ``test`` or ``fresh`` is logged there)."""
     split: Literal["tuning", "test", "extra", "focus", "pairs", "servo", "beside", "timing", "combos",
                    "fresh"] = "tuning"
     results: str = ""
