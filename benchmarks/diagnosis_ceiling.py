@@ -81,8 +81,9 @@ def classify(truth_vs_answer: tuple, answer_vs_truth: tuple, min_gain: float, mi
 
 
 class _Oracle:
-    """Wraps ``Selector.run`` for one diagnosis: after the selection, fits the true hypothesis
-    (``labels``, ``values``: the truth's) and keeps what ``judge`` needs."""
+    """Wraps ``Selector.run`` for one diagnosis: after the selection it keeps the selector and its
+    models (``capture``); ``judge`` then fits the true hypothesis (``labels``, ``values``: the
+    truth's) and sets it against the answer."""
 
     def __init__(self, labels: list[str], values: dict):
         self.labels, self.values, self.out = labels, values, {}
@@ -96,7 +97,7 @@ class _Oracle:
         def run(sel):
             final, steps = oracle._orig(sel)
             try:
-                oracle.fit(sel, final, steps)
+                oracle.capture(sel, final, steps)
             except Exception as e:  # noqa: BLE001  (recorded; the diagnosis itself goes on)
                 oracle.out = {"status": f"error: {type(e).__name__}: {e}"[:200]}
             return final, steps
@@ -109,7 +110,7 @@ class _Oracle:
 
         select.Selector.run = self._orig
 
-    def fit(self, sel, final, steps) -> None:
+    def capture(self, sel, final, steps) -> None:
         self.sel, self.models = sel, [steps[0]] + list(steps[1:]) + [final]
         by_label = {c.label: c for c in sel.cands}
         missing = [lb for lb in self.labels if lb not in by_label]
@@ -185,7 +186,10 @@ def run_case(case: sysid_cases.Case, work: str) -> dict:
                                     progress=False))
     named = [s["effect"] if not s["target"] else f"{s['effect']}@{s['target']}"
              for s in bench._selected(d) if s["effect"] != "none"]
-    j = oracle.judge(named) if (set(bench.named_keys(d)) != set(labels)) else {"status": "right"}
+    try:
+        j = oracle.judge(named) if (set(bench.named_keys(d)) != set(labels)) else {"status": "right"}
+    except Exception as e:  # noqa: BLE001  (one case's failure is its row, not the run's end)
+        j = {"status": f"error: {type(e).__name__}: {e}"[:200]}
     return {"case": case.label, "kind": case.kind, "truth": " + ".join(labels) or "none",
             "named": " + ".join(named) or "none", **{k: v for k, v in j.items() if k != "missing"},
             "missing": ",".join(j.get("missing", [])), "seconds": round(time.time() - t0, 1)}

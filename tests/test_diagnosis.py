@@ -420,7 +420,7 @@ class _Fine:
     def __init__(self, at_finer, calls):
         self.at_finer, self.calls, self.scales, self.fits = at_finer, calls, {}, []
 
-    def fit(self, z0, v0, names, tiles, iters=6, bounds=None):   # (re-fitted at that step: ``finer_refit``)
+    def fit(self, z0, v0, names, tiles, iters=6, bounds=None, at_noise=False):   # (re-fitted at that step: ``finer_refit``)
         self.fits.append(iters)
         return types.SimpleNamespace(z=z0)
 
@@ -1174,7 +1174,9 @@ def test_a_servo_at_its_force_limit_is_fitted_with_the_models_mass(tmp_path):
     the rule still serves a mass that falls far, and a diagnosis that searches no payload.)"""
     design = dataclasses.replace({c.seed: c for c in cases.split_cases("beside")}[3834].design, seconds=6.0, rate=500.0)
     case = cases.Case(3834, "linear_axis", "single", (("actuator_saturation", "drive", 2),), design=design)
-    d, _ = _run(tmp_path, case, mass_above=0)
+    # (with the fit's freeze measured against the misfit, as when the rule was made: measured
+    # against the noise, ``tuning.md`` step 77, the first fit no longer slides to the far mass here)
+    d, _ = _run(tmp_path, case, mass_above=0, freeze_at_noise=False)
     (sel,) = d["selected"]
     true = cases.generate(case, str(tmp_path / "case"))["truth_values"]["actuator_saturation@drive"]["saturation:drive"]
     assert sel["effect"] == "actuator_saturation" and "masses held at the model's" in sel["note"]
@@ -1186,7 +1188,7 @@ def test_a_servo_at_its_force_limit_is_fitted_with_the_models_mass(tmp_path):
     assert "| `mass:carriage` | 5 | " in open(tmp_path / "diag" / "report.md").read() and "| held |" in open(
         tmp_path / "diag" / "report.md").read()
     # without the rule the same limit is named on the far scale
-    d2, _ = _run(tmp_path / "off", case, plausible_masses=False, mass_above=0)
+    d2, _ = _run(tmp_path / "off", case, plausible_masses=False, mass_above=0, freeze_at_noise=False)
     assert d2["selected"][0]["params"]["saturation:drive"] > 10 * true
     assert d2["nominal_refit"]["mass:carriage"]["fitted"] > 10 * 5.0
     assert d["fit"]["after"] < d2["fit"]["after"]
