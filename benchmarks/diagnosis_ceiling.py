@@ -111,7 +111,7 @@ class _Oracle:
         select.Selector.run = self._orig
 
     def capture(self, sel, final, steps) -> None:
-        self.sel, self.models = sel, [steps[0]] + list(steps[1:]) + [final]
+        self.sel, self.models = sel, list(steps) + [final]
         by_label = {c.label: c for c in sel.cands}
         missing = [lb for lb in self.labels if lb not in by_label]
         self.out = {"status": "not searched", "missing": missing} if missing else {"status": "ready"}
@@ -169,12 +169,13 @@ class _Oracle:
 
 
 def run_case(case: sysid_cases.Case, work: str) -> dict:
+    from sim2real.sysid.candidates import label
     from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
 
     folder = os.path.join(work, case.label)
     desc = bench.case_files(case, folder)
+    # (the benchmark's keys are the candidates' labels: a global effect has no target)
     labels = sorted(bench.truth_keys(case))
-    # the diagnosis labels a global effect without a target (``action_delay``), as the benchmark
     values = {lb: desc["truth_values"][lb] for lb in labels}
     t0 = time.time()
     with _Oracle(labels, values) as oracle:
@@ -184,8 +185,7 @@ def run_case(case: sysid_cases.Case, work: str) -> dict:
                                     heldout=(os.path.join(folder, "heldout.csv"),),
                                     out=os.path.join(folder, "diagnosis"), overwrite=True, plots=False,
                                     progress=False))
-    named = [s["effect"] if not s["target"] else f"{s['effect']}@{s['target']}"
-             for s in bench._selected(d) if s["effect"] != "none"]
+    named = [label(s["effect"], s["target"]) for s in bench._selected(d) if s["effect"] != "none"]
     try:
         j = oracle.judge(named) if (set(bench.named_keys(d)) != set(labels)) else {"status": "right"}
     except Exception as e:  # noqa: BLE001  (one case's failure is its row, not the run's end)

@@ -185,9 +185,10 @@ class Fitter:
         r0 = self.residuals(z[None], v0[None], tiles)[0]
         phi = self.phi(r0, v0, tiles)
 
-        def held_below(sigma2, r):
-            """The variance under which a direction's curvature leaves it put (``at_noise``: the noise's)."""
-            return min(sigma2, self._correlation(r)) if at_noise else sigma2
+        def held_below(sigma2, inflation):
+            """The variance under which a direction's curvature leaves it put (``at_noise``: the
+            noise's, 1 per residual times the correlation's ``inflation``)."""
+            return min(sigma2, inflation) if at_noise else sigma2
         mu = 1e-3
         it = 0
         H = np.zeros((len(names), len(names)))
@@ -206,8 +207,9 @@ class Fitter:
             age += 1
             H, g, solve_v, _ = self._reduce(r0, J_t, J_v, v0, tiles)
             n = r0.size
-            sigma2 = max(phi / max(n - len(names), 1), 1e-12) * self._correlation(r0)
-            w, V, keep = self._identifiable(H, held_below(sigma2, r0))
+            inflation = self._correlation(r0)
+            sigma2 = max(phi / max(n - len(names), 1), 1e-12) * inflation
+            w, V, keep = self._identifiable(H, held_below(sigma2, inflation))
             trials = []
             for m in (mu * 0.1, mu, mu * 10.0):
                 # Levenberg-Marquardt in the identifiable subspace (the others stay put)
@@ -242,7 +244,7 @@ class Fitter:
         corr = None
         if len(names):
             # (the directions the steps left put are those reported; the errors are the misfit's)
-            w, V, keep = self._identifiable(H, held_below(sigma2, r0))
+            w, V, keep = self._identifiable(H, held_below(sigma2, self._correlation(r0)))
             winv = np.where(keep, 1.0 / np.maximum(w, 1e-300), 0.0)
             cov = (V * winv) @ V.T * sigma2
             for k, nm in enumerate(names):
