@@ -672,6 +672,8 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     sel._finer = lambda k: fine
     ok, ratio, t, note = sel._accept(M, C, first=True)
     assert ok and ratio < 0.6 and "4x finer step" in note and "passes" in note
+    # the note gives the base's misfit at both steps and the floor it was below (1 x 0.5)
+    assert "(0.42 at its own step)" in note and "floor 0.5)" in note
     assert fine.fits == [3, 3]                             # both re-fitted there ...
     sel._accept(M, C, first=True)
     assert fine.fits == [3, 3]                             # ... once

@@ -563,14 +563,15 @@ class Selector:
         out = f2.velocities_many(zs, [f2.v_hat] * 2, self.val_tiles)
         a, b = out[0][1], out[1][1]
         ratio, t = self._judge(M, a, b)
-        level = self.level(M, a)
+        level, own = self.level(M, a), self.level(M, M.val)
         # the gain kept at the finer step is the evidence: its own measured floor is not asked
         # again (``SelectConfig.finer``); the absolute floor is, and most of the gain must stay
         ok = self._passes(ratio, t, level, first, step_level=0.0) and ratio <= self.cfg.finer_ratio
         why = why or (f"its base misfits by less than the physics step alone causes ({self.level(M):.3g} per residual, "
-                      f"floor {self.step_level:.3g})")
+                      f"floor {self._floor():.3g})")
         return ok, (f"{why}; at a {k}x finer step: ratio {ratio:.3f}, t = {t:.1f}, "
-                    f"misfit {level:.3g} against the floor {self._floor(0.0):.3g}: {'passes' if ok else 'fails'}")
+                    f"misfit {level:.3g} ({own:.3g} at its own step) against the floor "
+                    f"{self._floor(0.0):.3g}: {'passes' if ok else 'fails'}")
 
     def _fitted_finer(self, f2, X: Model) -> np.ndarray:
         """``X``'s parameters re-fitted at the finer step (``SelectConfig.finer_refit`` steps from
