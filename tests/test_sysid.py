@@ -586,7 +586,7 @@ def test_bundled_real_recordings_load_against_their_models(folder, model):
 def test_backlash_is_searched_on_an_integrating_servo_too(tmp_path):
     """An ``intvelocity`` servo integrates its command; the backlash stage then holds the setpoint
     itself (``kinds/backlash.py``). A backlash candidate is made for it as for the motor beside it,
-    and its width can be set."""
+    and its width can be set; each band's fit keeps its mesh compliant."""
     from sim2real.sysid.candidates import Scales, library
     from sim2real.sysid.system import System
 
@@ -599,10 +599,15 @@ def test_backlash_is_searched_on_an_integrating_servo_too(tmp_path):
     system = System(str(xml))
     sc = Scales(force=np.ones(2), speed=np.ones(2), range=np.ones(2), act_force=np.ones(2), dt=0.01, max_delay=8,
                 inertia=np.full(2, 0.01))
-    backlash = [c.target for c in library(system, sc, ("backlash",))]
-    assert backlash == ["iv", "m2"]
+    bands = library(system, sc, ("backlash",))
+    assert [c.target for c in bands] == ["iv", "m2"]
     assert not any("backlash not searched" in n for n in system.notes)
     system.spec.check_value("backlash:iv", 0.01)
+    # the screen simulates rigid and compliant meshes; a fit stays compliant: 0, the rigid mesh,
+    # is another model, not the soft end of the stiffness (``kinds/backlash.py``, tuning.md step 79)
+    for c in bands:
+        k = c.params.index(f"backlash_stiffness:{c.target}")
+        assert {g[k] for g in c.grid} >= {0.0} and 0 < c.search[k][0] < min(g[k] for g in c.grid if g[k] > 0)
 
 
 def test_backlash_on_an_integrating_servo_is_a_rotor_behind_a_dead_band(tmp_path):
