@@ -246,10 +246,11 @@ class Backlash(Kind):
             # not the soft end of the stiffness but another model, the rigid mesh, and a step
             # clipped to it jumps there (an arm's shoulder band: 9 mrad at 0, 30 mrad and 339
             # N m/rad from the same start when it was not reached; ``tuning.md`` step 79)
-            grid = [(w, 0.03 * J, k) for w in widths for k in (0.0, J * (2 * np.pi * 25.0) ** 2)]
-            scales = [float(widths[1]), 0.03 * J, J * (2 * np.pi * 25.0) ** 2]
-            search = [(0.25 * float(widths[0]), float(widths[-1])), (1e-4 * J, 2.0 * J),
-                      (J * (2 * np.pi * 2.5) ** 2, J * (2 * np.pi * 200.0) ** 2)]
+            def ringing(hz):  # the mesh stiffness at which the joint rings at ``hz``
+                return J * (2 * np.pi * hz) ** 2
+            grid = [(w, 0.03 * J, k) for w in widths for k in (0.0, ringing(25.0))]
+            scales = [float(widths[1]), 0.03 * J, ringing(25.0)]
+            search = [(0.25 * float(widths[0]), float(widths[-1])), (1e-4 * J, 2.0 * J), (ringing(2.5), ringing(200.0))]
         else:
             grid = [(w, f * J) for w in widths for f in (0.01, 0.1)]
             scales = [float(widths[1]), 0.03 * J]
