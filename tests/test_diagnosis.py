@@ -505,6 +505,48 @@ def test_a_pair_that_joined_together_is_judged_as_one_by_the_backward_check():
     assert M.effects == [] and "coulomb_friction@j + action_delay were dropped" in sel.pruned[0]
 
 
+def test_the_other_half_of_a_pair_is_screened_on_top_of_the_first():
+    """``SelectConfig.pair_screen`` (the combos list's 6110: a flywheel's delay and friction): no
+    single passes, the delay predicts the validation segments best, and the friction, screened low
+    on the nominal model, was never fitted, so no pair held it. Screened on top of the delay's fit,
+    it is fitted together with the delay, from its screen's start, and the pair joins; off, the
+    pairs of the fitted ones alone fail and nothing joins."""
+    from sim2real.sysid.candidates import Candidate
+    from sim2real.sysid.select import Trial
+
+    D = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+    L = Candidate("motor_lag", "j", ("motor_lag:j",), ((0.01,),), (1.0,), ((0.0, 0.2),))
+    F = Candidate("coulomb_friction", "j", ("coulomb:j",), ((0.1,),), (1.0,), ((0.0, 1.0),))
+    rng = np.random.default_rng(1)
+    base = 20 + rng.uniform(0, 1, 10)
+    fits = {frozenset(): (5000.0, base),
+            frozenset({D.label}): (3000.0, base * np.r_[0.2, 0.2, np.ones(8)], 0.0, 2.0),
+            frozenset({L.label}): (3500.0, base * np.r_[0.3, np.ones(9)], 0.0, 0.01),
+            frozenset({D.label, L.label}): (2900.0, base * np.r_[0.2, 0.2, np.ones(8)], 0.0, 2.0),
+            frozenset({D.label, F.label}): (1000.0, base * 0.1, 0.0, 0.5)}
+    sel, fit = _selector(fits)
+    sel.spec.indices = lambda names: [0]
+    sel.cands = [D, L, F]
+    screened = []
+
+    def screen(M, cands):
+        screened.append(([c.label for c in M.effects], [c.label for c in cands]))
+        t = Trial(F, 0.3)
+        t.start = (0.1,)
+        return [t]
+
+    sel.screen = screen
+    M = fit([], 0, 0)
+    tried = [Trial(D, 0.5, fit([D], 0, 0), val_ratio=0.6), Trial(L, 0.6, fit([L], 0, 0), val_ratio=0.9)]
+    first, second = sel._pair(M, tried)
+    assert screened == [(["action_delay"], ["coulomb_friction@j"])]   # on the delay's fit, what was not fitted
+    assert first.candidate is D and second.candidate is F and second.passed
+    assert [c.label for c in second.model.effects] == ["action_delay", "coulomb_friction@j"]
+    assert "screened on top of its fit" in second.note
+    sel.cfg = dataclasses.replace(sel.cfg, pair_screen=0)
+    assert sel._pair(M, tried) is None and len(screened) == 1
+
+
 def test_a_backlash_beside_a_named_friction_is_fitted_whatever_its_screen_score():
     """``SelectConfig.geared``: once a Coulomb friction is named on a joint, the backlash on that
     joint's actuator joins the candidates fitted in the round (the screen's linearisation in the

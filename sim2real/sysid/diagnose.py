@@ -106,6 +106,8 @@ class DiagnoseConfig:
       freeze_at_noise: a fit's steps leave put only the directions the data's noise leaves
         undetermined (false: also those the start's own misfit does, as before ``tuning.md``
         step 77; ``SelectConfig``).
+      pair_screen: when no single effect passes, the candidates not fitted are screened on top of
+        the best fit and this many of them fitted together with it as pairs (0: off; ``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
@@ -170,6 +172,7 @@ class DiagnoseConfig:
     band_shown: bool = SelectConfig.band_shown
     timing_restart: float = SelectConfig.timing_restart
     freeze_at_noise: bool = SelectConfig.freeze_at_noise
+    pair_screen: int = SelectConfig.pair_screen
     refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
@@ -199,6 +202,8 @@ class DiagnoseConfig:
             raise ValueError(f"mass_above={self.mass_above}: must be 0 (no limit) or a factor >= 1")
         if not (self.timing_restart == 0 or 0 < self.timing_restart < 1):
             raise ValueError(f"timing_restart={self.timing_restart}: must be 0 (off) or a factor between 0 and 1")
+        if self.pair_screen < 0:
+            raise ValueError(f"pair_screen={self.pair_screen}: must be >= 0 (0: off)")
         if self.finer < 0:
             raise ValueError(f"finer={self.finer}: must be >= 0 (0: off)")
         if self.band_scan == 1 or self.band_scan < 0:
@@ -617,7 +622,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                     plausible_masses=cfg.plausible_masses, geared=cfg.geared,
                                     backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan,
                                     band_shown=cfg.band_shown, timing_restart=cfg.timing_restart,
-                                    freeze_at_noise=cfg.freeze_at_noise),
+                                    freeze_at_noise=cfg.freeze_at_noise, pair_screen=cfg.pair_screen),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
                        allowed=cfg.expressible or None)
         final, steps = sel.run()

@@ -30,8 +30,8 @@ loses its gain there, a real one keeps it.
 A fit whose effect ends at its absent value (``Candidate.is_off``) never names it: its gain is a
 better fit of the current hypothesis, which replaces the current model before the round runs
 again. When no single effect passes on the nominal model but one lowers the validation error, it
-is fitted together with each of the next best (``_pair``): two effects that only together explain
-the data.
+is fitted together with each of the next best, and with the candidates that screen best on top
+of it (``_pair``): two effects that only together explain the data.
 
 A Coulomb friction that passes is then tried with a level per direction (``coulomb_asym``),
 kept by the same test. A fit whose effect parameter ends at the edge of its search range is
@@ -201,6 +201,9 @@ class SelectConfig:
       freeze_at_noise: every fit's steps leave put only the directions the data's noise leaves
         undetermined, not those the start's own misfit does (``Fitter.fit``'s ``at_noise``;
         ``tuning.md`` step 77).
+      pair_screen: in the pair search (``Selector._pair``) the candidates not fitted this round are
+        screened on top of the best fit, and this many of the best of them (by ``min_score``) are
+        fitted together with it too (0: off). ``tuning.md`` step 80.
     """
 
     min_gain: float = 0.05
@@ -223,6 +226,7 @@ class SelectConfig:
     band_shown: bool = True
     timing_restart: float = 0.5
     freeze_at_noise: bool = True
+    pair_screen: int = 2
 
 
 TIMING = ("action_delay", "motor_lag")
@@ -735,7 +739,9 @@ class Selector:
         delay matters), or one's fit takes up more than ``PAIR_TRAIN`` of the training objective
         however it validates, every two of the fitted ones (``top``: up to 6 pairs) are fitted together;
         a candidate that alone predicts worse may be half of the answer (tuning half: a joint
-        stiffness that only helps beside a sensor offset, the fourth of four alone). The
+        stiffness that only helps beside a sensor offset, the fourth of four alone). So are the
+        best fit and each of the ``pair_screen`` candidates that screen best on top of it, of
+        those not fitted alone (a half the other's misfit hid from the first screen). The
         pair joins the model if it passes the same test against ``M`` and lowers the validation
         error by ``min_gain`` below each of its members alone. Only on the nominal model: on top
         of a named effect the data are mostly explained, and more pairs tested on the same
@@ -752,29 +758,41 @@ class Selector:
         if not good or (good[0].val_ratio > 1 - c.min_gain and good_fit(good, M) > PAIR_TRAIN):
             return None
         level = self.level(M)
+        # (first, second, where the second's parameters start, the lower validation error alone)
+        pairs = [(a, b, b.model.z, min(np.sum(a.model.val), np.sum(b.model.val)), "")
+                 for i, a in enumerate(good) for b in good[i + 1:] if a.candidate.label != b.candidate.label]
+        if c.pair_screen:
+            # the other half of a pair may screen low on the nominal model, where the first half's
+            # misfit hides it, and so never be fitted (the combos list's 6110: a flywheel's delay
+            # fitted, its friction screened sixth of seven): screened on top of the best fit, the
+            # best ``pair_screen`` not fitted alone are paired with it, from their screen's starts
+            a = good[0]
+            done = {t.candidate.label for t in tried} | {e.label for e in M.effects}
+            rest = [x for x in self.cands if x.label not in done]
+            self.progress(f"screening {len(rest)} candidates on top of {a.candidate.label} for a pair")
+            for x in [t for t in self.screen(a.model, rest) if t.score >= c.min_score][: c.pair_screen]:
+                z = a.model.z.copy()
+                z[self.spec.indices(list(x.candidate.params))] = x.start
+                pairs.append((a, x, z, np.sum(a.model.val), " (screened on top of its fit)"))
         best = None
-        for i in range(len(good)):
-            for j in range(i + 1, len(good)):
-                a, b = good[i], good[j]
-                if a.candidate.label == b.candidate.label:
-                    continue
-                self.progress(f"fitting {a.candidate.label} and {b.candidate.label} together on top of {M.label}")
-                z0 = a.model.z.copy()
-                z0[self.spec.indices(list(b.candidate.params))] = b.model.z[self.spec.indices(list(b.candidate.params))]
-                P = self.fit(M.effects + [a.candidate, b.candidate], z0, a.model.result.v0)
-                self.validate([P])
-                alone = min(np.sum(a.model.val), np.sum(b.model.val))
-                # the cheap conditions first: ``_accept`` may simulate at a finer step
-                if (np.sum(P.val) <= (1 - c.min_gain) * alone
-                        and not any(self._absent(x.candidate, P) for x in (a, b))
-                        and (best is None or np.sum(P.val) < np.sum(best[2].val))
-                        and (acc := self._accept(M, P, False))[0]):
-                    best = (a, b, P, acc[1], acc[2], acc[3])
+        for a, b, zb, alone, how in pairs:
+            self.progress(f"fitting {a.candidate.label} and {b.candidate.label} together on top of {M.label}")
+            z0 = a.model.z.copy()
+            idx = self.spec.indices(list(b.candidate.params))
+            z0[idx] = zb[idx]
+            P = self.fit(M.effects + [a.candidate, b.candidate], z0, a.model.result.v0)
+            self.validate([P])
+            # the cheap conditions first: ``_accept`` may simulate at a finer step
+            if (np.sum(P.val) <= (1 - c.min_gain) * alone
+                    and not any(self._absent(x.candidate, P) for x in (a, b))
+                    and (best is None or np.sum(P.val) < np.sum(best[2].val))
+                    and (acc := self._accept(M, P, False))[0]):
+                best = (a, b, P, acc[1], acc[2], acc[3], how)
         if best is None:
             return None
-        a, b, P, ratio, t, note = best
+        a, b, P, ratio, t, note, how = best
         second = Trial(b.candidate, b.score, P, ratio, t, True, level,
-                       note=f"fitted together with {a.candidate.label}: neither passed alone" + (f"; {note}" if note else ""))
+                       note=f"fitted together with {a.candidate.label}{how}: neither passed alone" + (f"; {note}" if note else ""))
         return a, second
 
     def run(self) -> tuple[Model, list[Model]]:
