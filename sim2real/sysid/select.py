@@ -767,8 +767,8 @@ class Selector:
             # fitted, its friction screened sixth of seven): screened on top of the best fit, the
             # best ``pair_screen`` not fitted alone are paired with it, from their screen's starts
             a = good[0]
-            done = {t.candidate.label for t in tried} | {e.label for e in M.effects}
-            rest = [x for x in self.cands if x.label not in done]
+            fitted = {t.candidate.label for t in tried}   # (``M`` is the nominal model: nothing named yet)
+            rest = [x for x in self.cands if x.label not in fitted]
             self.progress(f"screening {len(rest)} candidates on top of {a.candidate.label} for a pair")
             for x in [t for t in self.screen(a.model, rest) if t.score >= c.min_score][: c.pair_screen]:
                 z = a.model.z.copy()
