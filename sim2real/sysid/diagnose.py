@@ -77,7 +77,8 @@ class DiagnoseConfig:
         (measured per diagnosis: ``discretization_level``) ...
       strong: ... unless the effect's validation ratio is this low or lower.
       finer: an effect that passes every test but ``floor_step`` is judged again with a physics
-        step this many times shorter, and passes if its gain holds there (0 or 1: it fails).
+        step this many times shorter, and passes if its gain holds there (0 or 1: it fails) ...
+      finer_ratio: ... lowering the validation error there to this fraction or below (``SelectConfig``).
       top: candidates fitted in full per selection round (the best by the screen).
       max_effects: at most this many effects are named.
       mass_above: where payloads are searched (``mass_offset``), a body's re-fitted mass may rise
@@ -162,6 +163,7 @@ class DiagnoseConfig:
     floor_step: float = SelectConfig.floor_step
     strong: float = SelectConfig.strong
     finer: int = SelectConfig.finer
+    finer_ratio: float = SelectConfig.finer_ratio
     top: int = SelectConfig.top
     max_effects: int = SelectConfig.max_effects
     mass_above: float = 2.0
@@ -206,6 +208,8 @@ class DiagnoseConfig:
             raise ValueError(f"pair_screen={self.pair_screen}: must be >= 0 (0: off)")
         if self.finer < 0:
             raise ValueError(f"finer={self.finer}: must be >= 0 (0: off)")
+        if not 0 < self.finer_ratio <= 1:
+            raise ValueError(f"finer_ratio={self.finer_ratio}: must be a fraction in (0, 1]")
         if self.band_scan == 1 or self.band_scan < 0:
             raise ValueError(f"band_scan={self.band_scan}: must be 0 (off) or >= 2 widths")
         for key in ("num_windows", "top", "max_effects", "backlash_starts", "refine_iters"):
@@ -619,6 +623,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                        SelectConfig(min_gain=cfg.min_gain, min_t=cfg.min_t, min_gain_first=cfg.min_gain_first,
                                     floor_level=cfg.floor_level, strong=cfg.strong, top=cfg.top,
                                     max_effects=cfg.max_effects, floor_step=cfg.floor_step, finer=cfg.finer,
+                                    finer_ratio=cfg.finer_ratio,
                                     plausible_masses=cfg.plausible_masses, geared=cfg.geared,
                                     backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan,
                                     band_shown=cfg.band_shown, timing_restart=cfg.timing_restart,
