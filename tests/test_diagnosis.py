@@ -722,14 +722,19 @@ def test_a_gain_below_the_step_floor_is_judged_again_at_a_finer_step():
     sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base, half * 1.5], calls)   # a quarter of it stays
     ok, _, _, note = sel._accept(M, C, first=True)
     assert not ok and note.endswith("fails")
+    sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base, half * 1.25], calls)  # ratio 0.62: most stays
+    assert sel._accept(M, C, first=True)[0]
+    sel._fine, sel.cfg = select._UNBUILT, dataclasses.replace(sel.cfg, finer_ratio=0.5)   # (the ratio before step 81)
+    assert not sel._accept(M, C, first=True)[0]
+    sel.cfg = dataclasses.replace(sel.cfg, finer_ratio=select.SelectConfig.finer_ratio)
     sel._fine, sel._finer = select._UNBUILT, lambda k: _Fine([base * 0.5, half], calls)   # the gain was the step's
     assert not sel._accept(M, C, first=True)[0]
     sel._fine, sel.cfg = select._UNBUILT, dataclasses.replace(sel.cfg, finer=0)   # off: the floor decides
     assert not sel._accept(M, C, first=True)[0]
-    assert calls == [2, 2, 2, 2]
+    assert calls == [2] * 6
     # above the floor no finer simulation is needed
     sel.step_level = 0.01
-    assert sel._accept(M, C, first=True)[0] and calls == [2, 2, 2, 2]
+    assert sel._accept(M, C, first=True)[0] and calls == [2] * 6
 
 
 def test_the_case_lists_keep_their_seeds_apart_and_the_test_lists_frozen():
