@@ -106,7 +106,8 @@ class DiagnoseConfig:
         objective (0: off; ``SelectConfig``).
       freeze_at_noise: a fit's steps leave put only the directions the data's noise leaves
         undetermined (false: also those the start's own misfit does, as before ``tuning.md``
-        step 77; ``SelectConfig``).
+        step 77; ``SelectConfig``). A model with no actuator (a free swing) always fits the
+        second way: nothing fixes its force scale (``_run`` says why).
       pair_screen: when no single effect passes, the candidates not fitted are screened on top of
         the best fit and this many of them fitted together with it as pairs (0: off; ``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
