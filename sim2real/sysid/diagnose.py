@@ -624,8 +624,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         # together moves the bodies alike, and that direction is left put only because the fit's
         # misfit leaves it undetermined. Measured against the noise alone (``freeze_at_noise``) its
         # finite-difference curvature passes for information, and the steps walk it away: the IBM
-        # double pendulum's rods fell to 1/6 of their masses under 12.6 kg payloads (37 and 11 g
-        # with the misfit's rule). So a free swing's fits keep that rule.
+        # double pendulum's rods fell to 18% and 29% of their masses under 12.6 and 4.1 kg payloads
+        # (37 and 11 g with the misfit's rule). So a free swing's fits keep that rule.
         freeze = cfg.freeze_at_noise and system.mj.nu > 0
         sel = Selector(fitter, system.nominal, cands,
                        SelectConfig(min_gain=cfg.min_gain, min_t=cfg.min_t, min_gain_first=cfg.min_gain_first,
