@@ -1,17 +1,9 @@
 # python finer_checks.py DIR...: every finer-step check in the stored diagnoses: the candidate, true or not, its ratio and t
 # at the finer step, passes/fails; then the failures with t >= 2 binned by that ratio (what finer_ratio 0.5 -> x would admit).
-import json, glob, os, collections, sys, re
-def key(e, t): return e if e in ('action_delay', 'none') else f'{e}@{t}'
-seen = {}
-for pat in sys.argv[1:]:
-    for f in sorted(glob.glob(pat + '/*/diagnosis/diagnosis.json')):
-        seen[f.split('/')[-3]] = f
+import collections, sys, re
+from stored import cases, key
 rows = []
-for case, f in sorted(seen.items()):
-    tr = json.load(open(os.path.join(os.path.dirname(os.path.dirname(f)), 'truth.json')))
-    truth = {key(e, t) for e, t, _ in tr['effects']}
-    d = json.load(open(f))
-    named = {key(s['effect'], s['target']) for s in d['selected'] if s['effect'] != 'none'}
+for case, truth, named, d in cases(sys.argv[1:]):
     for r in d['rounds']:
         for c in r['candidates']:
             n = c.get('note') or ''

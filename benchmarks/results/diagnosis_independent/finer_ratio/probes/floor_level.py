@@ -1,17 +1,10 @@
 # python floor_level.py DIR...: fitted candidates that failed only by floor_level (ratio, t passed, base misfit <= 0.003 per
 # residual, the step's floor lower): true or false.
-import json, glob, os, collections, sys
-def key(e, t): return e if e in ('action_delay', 'none') else f'{e}@{t}'
-seen = {}
-for pat in sys.argv[1:]:
-    for f in sorted(glob.glob(pat + '/*/diagnosis/diagnosis.json')):
-        seen[f.split('/')[-3]] = f
-rows = []
-for case, f in sorted(seen.items()):
-    tr = json.load(open(os.path.join(os.path.dirname(os.path.dirname(f)), 'truth.json')))
-    truth = {key(e, t) for e, t, _ in tr['effects']}
-    d = json.load(open(f))
-    named = {key(s['effect'], s['target']) for s in d['selected'] if s['effect'] != 'none'}
+import collections, sys
+from stored import cases, key
+rows, n = [], 0
+for case, truth, named, d in cases(sys.argv[1:]):
+    n += 1
     sl = d['step_level']
     for r in d['rounds']:
         first = r['base'] == 'none'
@@ -24,4 +17,4 @@ for case, f in sorted(seen.items()):
                 k = key(c['effect'], c['target'])
                 rows.append((case, r['base'], k, k in truth, k in named, round(ratio, 3), round(t, 2), round(lv, 5), round(sl, 6)))
 for x in rows: print(*x)
-print(collections.Counter((x[3]) for x in rows), len(seen))
+print(collections.Counter((x[3]) for x in rows), n)
