@@ -620,13 +620,13 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                 system.notes.append("not searched, their parameters not among those allowed (`expressible`): "
                                     + ", ".join(left))
         bar.step(text="fitting")
-        # With no actuator nothing fixes the force scale: every mass, payload and dissipation scaled
-        # together moves the bodies alike, and that direction is left put only because the fit's
-        # misfit leaves it undetermined. Measured against the noise alone (``freeze_at_noise``) its
-        # finite-difference curvature passes for information, and the steps walk it away: the IBM
-        # double pendulum's rods fell to 18% and 29% of their masses under 12.6 and 4.1 kg payloads
-        # (37 and 11 g with the misfit's rule). So a free swing's fits keep that rule.
-        freeze = cfg.freeze_at_noise and system.mj.nu > 0
+        # With no actuator nothing fixes the force scale (``System.force_known``), and that direction
+        # is left put only because the fit's misfit leaves it undetermined. Measured against the
+        # noise alone (``freeze_at_noise``) its finite-difference curvature passes for information,
+        # and the steps walk it away: the IBM double pendulum's rods fell to 18% and 29% of their
+        # masses under 12.6 and 4.1 kg payloads (37 and 11 g with the misfit's rule). So a free
+        # swing's fits keep that rule.
+        freeze = cfg.freeze_at_noise and system.force_known
         sel = Selector(fitter, system.nominal, cands,
                        SelectConfig(min_gain=cfg.min_gain, min_t=cfg.min_t, min_gain_first=cfg.min_gain_first,
                                     floor_level=cfg.floor_level, strong=cfg.strong, top=cfg.top,
@@ -943,7 +943,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         notes.append("not identifiable from these recordings (held at the nominal values): " + "; ".join(
             " + ".join(f"{w:+.2f} {n}" for n, w in u.items()) for u in unidentified)
             + (" -- with no known force, positions fix forces only up to a common scale: values are relative "
-               "to the nominal masses" if not system.mj.nu else ""))
+               "to the nominal masses" if not system.force_known else ""))
     # before / after on the check segments
     (nr_b, pred_b), (nr_a, pred_a) = check_before, check_after
     before, after = float(np.mean(list(nr_b.values()))), float(np.mean(list(nr_a.values())))
@@ -961,7 +961,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     far = far_masses(nominal_refit)
     if far:
         notes.append(far)
-    scale = force_scale(nominal_refit, system.mj.nu > 0)
+    scale = force_scale(nominal_refit, system.force_known)
     if scale:
         notes.append(force_scale_note(scale))
     capped = [f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g} {r['unit']}" for n, r in nominal_refit.items()

@@ -182,6 +182,15 @@ class System:
     def nq(self) -> int:
         return int(self.mj.nq)
 
+    @property
+    def force_known(self) -> bool:
+        """Whether the recordings' commands apply a known force (the model has an actuator). Without
+        one (a free swing) positions fix forces only up to a common scale: every mass, payload and
+        dissipation scaled together moves the bodies alike, so that direction is unidentifiable and
+        fitted values are relative to the nominal masses (the fits, the force-scale finding and the
+        report's notes all ask this)."""
+        return int(self.mj.nu) > 0
+
     def declared_stiffness(self, joint: str) -> bool:
         return float(self.mj.jnt_stiffness[self.joints.index(joint)]) > 0
 
