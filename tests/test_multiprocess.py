@@ -77,12 +77,9 @@ DRIVER = textwrap.dedent("""
 """)
 
 
-def test_the_training_driver_in_two_processes_trains_and_resumes_as_one_process_with_two_devices(tmp_path):
-    """``scripts/train.py ... processes=2 process_id=K coordinator=host:port`` on 2 processes of
-    one CPU device each, stopped after one chunk and resumed (``resume=true``, the same processes
-    option): both end with the parameters of one process with 2 devices run without a stop;
-    process 0 alone writes the run folder (config, metrics, tests, policy), both write the
-    checkpoints."""
+def _driver(tmp_path, phases):
+    """Run the driver on 2 processes (each phase of ``phases`` in turn) and on one process with 2
+    devices; both must end with the same parameters, run folder, metrics and test log."""
     run = lambda *a: subprocess.Popen([sys.executable, "-c", DRIVER, *map(str, a)],  # noqa: E731
                                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
@@ -91,7 +88,7 @@ def test_the_training_driver_in_two_processes_trains_and_resumes_as_one_process_
             _, err = p.communicate(timeout=600)
             assert p.returncode == 0, err[-3000:]
 
-    for phase in ("first", "resume"):
+    for phase in phases:
         port = _free_port()
         wait([run("process", phase, tmp_path / "multi", tmp_path / f"p{k}.npy", k, port) for k in (0, 1)])
         if phase == "first":
@@ -106,6 +103,20 @@ def test_the_training_driver_in_two_processes_trains_and_resumes_as_one_process_
     rows = lambda d, f: [{k: v for k, v in r.items() if k != "wall_seconds"} for r in csv.DictReader(open(d / f))]  # noqa: E731
     assert rows(multi, "metrics.csv") == rows(single, "metrics.csv")
     assert rows(multi, "test.csv") == rows(single, "test.csv")
+
+
+def test_the_training_driver_in_two_processes_trains_as_one_process_with_two_devices(tmp_path):
+    """``scripts/train.py ... processes=2 process_id=K coordinator=host:port`` on 2 processes of
+    one CPU device each ends with the parameters of one process with 2 devices; process 0 alone
+    writes the run folder (config, metrics, tests, policy), both write the checkpoints."""
+    _driver(tmp_path, ["all"])
+
+
+@pytest.mark.slow  # five processes, each starting JAX and compiling (~115 s on 2 cores; make test-slow)
+def test_the_training_driver_in_two_processes_resumes_as_one_process_with_two_devices(tmp_path):
+    """The same, stopped after one chunk and resumed (``resume=true``, the same processes option):
+    the resumed pair ends as one process with 2 devices run without a stop."""
+    _driver(tmp_path, ["first", "resume"])
 
 
 def test_processes_need_a_coordinator_and_an_index_in_range():
