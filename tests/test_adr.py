@@ -57,6 +57,22 @@ def test_bad_settings_are_refused_by_name():
         adr_for("algo_options.num_evals=3")
 
 
+def test_a_tiny_adr_run_writes_bounds_inside_the_limit_box(tmp_path):
+    """ADR through the training driver at toy size (its jitted outer step, the arrays it writes):
+    the bounds of every update lie inside the limit box, low <= high."""
+    cfg = config_lib.load(TrainConfig, BALANCE + [
+        f"out_dir={tmp_path}", "name=adr", "algo=adr", "total_steps=16384", "progress=false", "tensorboard=false",
+        "ppo.num_envs=16", "ppo.num_steps=16", "ppo.net.hidden=[16]", "algo_options.init_low=[0.4]",
+        "algo_options.init_high=[0.6]", "algo_options.num_evals=4", "algo_options.buffer_size=2"])
+    train(cfg)
+    with np.load(tmp_path / "adr" / "arrays.npz") as f:
+        low, high = f["adr_low"][0, :, 0], f["adr_high"][0, :, 0]
+    assert len(low) >= 2 and np.isfinite(low).all() and np.isfinite(high).all()
+    assert (0.2 <= low).all() and (low <= high).all() and (high <= 3.0).all()
+
+
+# ~60 s on 2 cores (make test-slow); the fast set keeps the bounds' update rules and the tiny run above
+@pytest.mark.slow
 def test_bounds_follow_what_the_motor_can_hold(tmp_path):
     """2 Nm holds a light pole upright but not a heavy one: from [0.4, 0.6] kg the lower bound
     must reach the limit box's 0.2 kg, the upper one grow but stop well short of its 3 kg."""

@@ -62,7 +62,7 @@ def test_recurrent_and_context_policies_train_over_seeds(tmp_path, extra):
 
 
 # ~140 s on 2 cores, the fast set's longest test (make test-slow); the fast set keeps a PPO learning
-# outcome through LSDR's and ADR's balance toys (test_lsdr.py, test_adr.py)
+# outcome through LSDR's balance toy (test_lsdr.py)
 @pytest.mark.slow
 @pytest.mark.optimized  # runs long (see conftest.py)
 def test_ppo_learns_pendulum_swing_up_in_every_seed(tmp_path):
