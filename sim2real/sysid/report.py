@@ -337,9 +337,13 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
                 f"({fit['change']}), on {', '.join(fit['recordings'])}."),
           ("table", ["signal", "before", "after"],
            [[sig, f"{v['before']:.4g}", f"{v['after']:.4g}"] for sig, v in fit["per_signal"].items()])]
-    B += [("h2", "Steps"), ("table", ["model", "training objective", "validation objective", "held-out NRMSE", "kept"],
-                             [[s["model"], f"{s['objective']:.4g}", f"{s['validation']:.4g}", f"{s['heldout_nrmse']:.4g}",
-                               "yes" if s["kept"] else "no"] for s in d["steps"]])]
+    B += [("h2", "Steps"),
+          ("p", "Each step is the model with the effects found so far and every nominal parameter re-fitted with "
+                "them: `none` is the model file's own parameters re-fitted, so its held-out error is not the "
+                "\"before\" above (the model file as written). `kept`: what the held-out checks kept."),
+          ("table", ["model", "training objective", "validation objective", "held-out NRMSE", "kept"],
+           [[s["model"], f"{s['objective']:.4g}", f"{s['validation']:.4g}", f"{s['heldout_nrmse']:.4g}",
+             "yes" if s["kept"] else "no"] for s in d["steps"]])]
     e = d.get("energy") or {}
     if e.get("candidates"):
         verdict = (f"named: `{e['named']}`" if e.get("named") else e.get("rejected", "nothing explains "
