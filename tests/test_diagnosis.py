@@ -1232,12 +1232,12 @@ def test_a_servo_at_its_force_limit_is_fitted_with_the_models_mass(tmp_path):
     (``Selector._at_model_masses``): the limit comes out at the truth's. (Run without the 2x
     limit on re-fitted masses, ``mass_above``, which keeps such a mass from going far up at all:
     the rule still serves a mass that falls far, and a diagnosis that searches no payload.)"""
-    case = _SERVO_LIMIT
     # (with the fit's freeze measured against the misfit, as when the rule was made: measured
     # against the noise, ``tuning.md`` step 77, the first fit no longer slides to the far mass here)
-    d, _ = _run(tmp_path, case, mass_above=0, freeze_at_noise=False)
+    d, _ = _run(tmp_path, _SERVO_LIMIT, mass_above=0, freeze_at_noise=False)
     (sel,) = d["selected"]
-    true = cases.generate(case, str(tmp_path / "case"))["truth_values"]["actuator_saturation@drive"]["saturation:drive"]
+    # (the case ``_run`` generated: its truth.json)
+    true = json.load(open(tmp_path / "case" / "truth.json"))["truth_values"]["actuator_saturation@drive"]["saturation:drive"]
     assert sel["effect"] == "actuator_saturation" and "masses held at the model's" in sel["note"]
     # 0.1% off before step 74; 7% since: its wider search of the first fit (from starts 64x
     # below the grid) ends in a fit that predicts the held-out data 7.5x better (NRMSE 0.0020
@@ -1307,8 +1307,9 @@ def test_without_the_timing_restart_the_delay_takes_up_the_force_limit(tmp_path)
 
 @pytest.mark.slow
 def test_without_the_models_masses_a_servos_limit_is_named_on_the_far_scale(tmp_path):
-    true = cases.generate(_SERVO_LIMIT, str(tmp_path / "case"))["truth_values"]["actuator_saturation@drive"]["saturation:drive"]
     d2, _ = _run(tmp_path / "off", _SERVO_LIMIT, plausible_masses=False, mass_above=0, freeze_at_noise=False)
+    truth = json.load(open(tmp_path / "off" / "case" / "truth.json"))["truth_values"]
+    true = truth["actuator_saturation@drive"]["saturation:drive"]
     assert d2["selected"][0]["params"]["saturation:drive"] > 10 * true
     assert d2["nominal_refit"]["mass:carriage"]["fitted"] > 10 * 5.0
     d, _ = _run(tmp_path, _SERVO_LIMIT, mass_above=0, freeze_at_noise=False)
