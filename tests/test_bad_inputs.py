@@ -141,7 +141,9 @@ CASES = [
      "bad.xml: cannot compile the MJCF"),
     ("model_ball_joint", "diagnose", ["model=ball.xml", "recordings=[a.csv]"],
      {"ball.xml": '<mujoco><worldbody><body><joint name="hinge" type="ball"/><geom size=".1"/></body>'
-                  '</worldbody></mujoco>'}, "joint 'hinge' is not a hinge or slide"),
+                  '</worldbody></mujoco>'},
+     "column 'qpos:hinge': joint 'hinge' has several coordinates (a ball or free joint); its qpos columns are "
+     "qpos:hinge:qw, qpos:hinge:qx, qpos:hinge:qy, qpos:hinge:qz"),
     ("model_site_transmission", "diagnose", ["model=site.xml", "recordings=[a.csv]"],
      {"site.xml": '<mujoco><worldbody><body><joint name="hinge"/><geom size=".1"/><site name="s"/></body>'
                   '</worldbody><actuator><motor name="thrust" site="s" gear="0 0 1 0 0 0"/></actuator></mujoco>'},

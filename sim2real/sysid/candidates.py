@@ -135,8 +135,10 @@ def scales_from(system, trajs, act_force: np.ndarray) -> Scales:
     M = np.zeros((m.nv, m.nv))
     mujoco.mj_fullM(m, d, M)
     I = np.array([M[m.jnt_dofadr[j], m.jnt_dofadr[j]] for j in range(m.njnt)])
-    return Scales(np.maximum(F, 1e-9), np.maximum(np.sqrt(np.mean(v**2, 0)), 1e-9),
-                  np.maximum(np.ptp(q, 0), 1e-9), np.maximum(af, 1e-9), trajs[0].dt,
+    # per joint (its first dof's, its first coordinate's: a hinge's or slide's only one)
+    speed = np.sqrt(np.mean(v**2, 0))[m.jnt_dofadr]
+    span = np.ptp(q, 0)[m.jnt_qposadr]
+    return Scales(np.maximum(F, 1e-9), np.maximum(speed, 1e-9), np.maximum(span, 1e-9), np.maximum(af, 1e-9), trajs[0].dt,
                   int(system.spec["action_delay"].high), np.maximum(I, 1e-9))
 
 
@@ -153,7 +155,7 @@ def library(system, sc: Scales, effects=EFFECTS) -> list[Candidate]:
         out.append(Candidate(effect, target, tuple(params), tuple(tuple(float(x) for x in g) for g in grid),
                              tuple(float(s) for s in scales), tuple(tuple(map(float, r)) for r in search)))
 
-    targets = {kinds.JOINT: range(m.njnt), kinds.BODY: range(m.nbody), "": (-1,), kinds.ACTUATOR: range(m.nu)}
+    targets = {kinds.JOINT: system.one_dof, kinds.BODY: range(m.nbody), "": (-1,), kinds.ACTUATOR: range(m.nu)}
     for group in _GROUPS:
         plugins = [k for k in kinds.offering(group) if k.effect in effects]
         for t in targets[group]:

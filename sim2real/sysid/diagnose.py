@@ -494,7 +494,7 @@ def choose_horizon(system: System, trajs, budget: int = 6000, max_seconds: float
             # amplification of the start's noise beyond its linear drift (q + v t): chaos or
             # instability; plain drift is what refining each segment's velocity removes
             t = (np.arange(n_max) + 1) * dt
-            drift = np.maximum(tr.sigma_q, 1e-9)[None] + tr.sigma_v[None] * t[:, None]
+            drift = np.maximum(tr.sigma_q, 1e-9)[None] + system.columns.q_spread(tr.sigma_v)[None] * t[:, None]
             grows.append(np.sqrt(np.nanmean(((runs[1] - runs[0]) / drift) ** 2, 1)))
     with np.errstate(all="ignore"):
         err = np.nan_to_num(np.nanmedian(np.stack(errs), 0), nan=np.inf)
@@ -836,7 +836,7 @@ def _nrmse(sh: Shooting, fitter: Fitter, zs, tiles) -> list[tuple[dict, dict]]:
 def _signal_names(sh: Shooting) -> dict:
     s = sh.sys
     cols = () if sh.qvel_cols is None else sh.qvel_cols  # (None: no qvel signal, so no names read)
-    return {"qpos": [f"qpos:{j}" for j in s.joints], "qvel": [f"qvel:{s.joints[k]}" for k in cols],
+    return {"qpos": [f"qpos:{j}" for j in s.qpos_names], "qvel": [f"qvel:{s.dof_names[k]}" for k in cols],
             "force": [f"force:{a}" for a in s.actuators]}
 
 
@@ -991,7 +991,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         "sample_period": trajs[0].dt, "physics_step": system.h, "substeps": system.substeps,
         "smoothing_window_samples": [t.window for t in trajs],
         "horizon_samples": sh.H, "step_level": sel.step_level, "segments": {k: int(len(sh.tiles.of(k))) for k in ("fit", "val", "heldout")},
-        "noise": {t.name: {j: float(s) for j, s in zip(system.joints, t.sigma_q)} for t in trajs},
+        "noise": {t.name: {j: float(s) for j, s in zip(system.qpos_names, t.sigma_q)} for t in trajs},
         "answer": answer, "selected": selected,
         "effects": rounds[0]["candidates"] if rounds else [], "rounds": rounds, "steps": step_rows,
         "indistinguishable": indistinguishable, "unconfirmed": unconfirmed, "nominal_refit": nominal_refit,
@@ -1076,8 +1076,8 @@ def _locate(system, sh, pred, res, res_fit) -> dict:
                                              "nrmse": float(np.sqrt(np.mean(e[i, :, k] ** 2)) / std)})
     out["worst_windows"] = sorted(out["worst_windows"], key=lambda w: -w["nrmse"])[:10]
     m = system.mj
-    for j, jn in enumerate(system.joints):
-        dof = m.jnt_dofadr[j]
+    for j in system.one_dof:   # (a ball or free joint's dofs have no regime of their own here)
+        jn, dof = system.joints[j], m.jnt_dofadr[j]
         acts = [a for a in range(m.nu) if actuator_joint(m, a) == j]
         lim, bounds, ctrl = None, None, None
         if acts:

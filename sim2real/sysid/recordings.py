@@ -224,19 +224,25 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
                                  f"{', '.join(k + ':<name>' for k in KINDS)}")
         if len(v) != n:
             raise RecordingError(f"{path}: column '{name}' has {len(v)} values, time has {n}")
-    known = {
-        "joint": [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(model.njnt)],
-        "actuator": [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(model.nu)],
-    }
+    from sim2real.sysid.trajectory import ModelColumns
+
+    mc = ModelColumns(model, path)
+    # (a free or ball joint's columns name its coordinates: ``qpos:<joint>:qw``, ``qvel:<joint>:wx``)
+    known = {"qpos": mc.qpos_names, "qvel": mc.dof_names, "qfrc": mc.dof_names,
+             "ctrl": mc.actuators, "force": mc.actuators}
     for name in cols:
         kind, target = name.split(":", 1)
         what = _TARGET[kind]
-        if target not in known[what]:
+        if kind in ("qpos", "qvel", "qfrc") and target not in known[kind] and target in mc.joints:
+            coords = [c for c in known[kind] if c.startswith(target + ":")]
+            raise RecordingError(f"{path}: column '{name}': joint '{target}' has several coordinates (a ball or free "
+                                 f"joint); its {kind} columns are {', '.join(kind + ':' + c for c in coords)}")
+        if target not in known[kind]:
             raise RecordingError(f"{path}: column '{name}' names {what} '{target}', which the model does not have "
-                                 f"(model {what}s: {', '.join(str(k) for k in known[what])})")
+                                 f"(model {what}s: {', '.join(str(k) for k in known[kind])})")
     if not any(c.startswith("qpos:") for c in cols):
         raise RecordingError(f"{path}: no qpos:<joint> column; at least one measured position is needed")
-    missing = [a for a in known["actuator"] if f"ctrl:{a}" not in cols]
+    missing = [a for a in known["ctrl"] if f"ctrl:{a}" not in cols]
     if missing:
         raise RecordingError(f"{path}: missing command column(s) {', '.join('ctrl:' + a for a in missing)}")
     # values: the first non-finite entry, by row and column

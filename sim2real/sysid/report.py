@@ -181,7 +181,7 @@ def heldout_animation(path, system, sh, tiles, pred_b, pred_a, traj_index, secon
 
     gl_backend()
     tr = sh.trajs[traj_index]
-    joints = list(system.joints)
+    joints = list(system.qpos_names)   # (position columns: a ball or free joint has several)
     qb = np.stack([_stitch(sh, pred_b, tiles, "qpos", k, traj_index) for k in range(len(joints))], 1)
     qa = np.stack([_stitch(sh, pred_a, tiles, "qpos", k, traj_index) for k in range(len(joints))], 1)
     step = max(int(round(1.0 / (fps * tr.dt))), 1)  # samples per frame
@@ -194,15 +194,16 @@ def heldout_animation(path, system, sh, tiles, pred_b, pred_a, traj_index, secon
     if len(idx) < 2:
         raise ValueError("no held-out predictions to animate")
     m = system.mj
-    adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)] for j in joints]
+    adr = np.arange(m.nq)
 
     def poses(q):
         out = np.tile(m.qpos0, (len(idx), 1))
         out[:, adr] = q[idx]
         return out
 
-    slide = [m.jnt_type[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)] == mujoco.mjtJoint.mjJNT_SLIDE
-             for j in joints]
+    # per position column: an angle's error in mrad, a length's in mm, a quaternion component's in 1e-3
+    milli = ["mrad" if a else ("mm" if ":" not in c or c.rsplit(":", 1)[1] in "xyz" else "e-3")
+             for a, c in zip(system.angles, joints)]
 
     def captions(q):  # time, and the worst joint's distance from the measured pose
         out = []
@@ -210,7 +211,7 @@ def heldout_animation(path, system, sh, tiles, pred_b, pred_a, traj_index, secon
             e = np.abs(q[i] - tr.q[i])
             k = int(np.argmax(e))
             out.append(f"t = {tr.time[i]:.2f} s" + ("" if q is tr.q else
-                       f", {joints[k]} off by {e[k] * 1e3:.3g} {'mm' if slide[k] else 'mrad'}"))
+                       f", {joints[k]} off by {e[k] * 1e3:.3g} {milli[k]}"))
         return out
 
     meas = poses(tr.q)
@@ -246,11 +247,18 @@ def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_ro
 
     names = _signal_names(sh)
     units = {}
+    m = system.mj
     for j, jn in enumerate(system.joints):
-        slide = system.mj.jnt_type[j] == 2
+        slide = m.jnt_type[j] == 2
         units[f"qpos:{jn}"] = "m" if slide else "rad"
         units[f"qvel:{jn}"] = "m/s" if slide else "rad/s"
         units[jn] = "N" if slide else "N m"
+    for c in system.qpos_names:   # a ball or free joint's coordinates
+        if ":" in c:
+            units[f"qpos:{c}"] = "m" if c.rsplit(":", 1)[1] in "xyz" else ""
+    for c in system.dof_names:
+        if ":" in c:
+            units[f"qvel:{c}"] = "m/s" if c.rsplit(":", 1)[1].startswith("v") else "rad/s"
     for a, an in enumerate(system.actuators):
         units[f"force:{an}"] = "N" if actuator_is_linear(system.mj, a) else "N m"
     images = {}

@@ -133,7 +133,7 @@ class Shooting:
             # screen score, the held-out NRMSE) is diluted towards nothing. It is not compared.
             noise = np.max([tr.sigma_qvel for tr in trajs], 0)
             keep = noise < np.std(qv, 0) / np.sqrt(2)
-            self.left_out = [f"qvel:{system.joints[k]}" for k in np.where(~keep)[0]]
+            self.left_out = [f"qvel:{system.dof_names[k]}" for k in np.where(~keep)[0]]
             self.qvel_cols = np.where(keep)[0]
             if keep.any():
                 self.signals["qvel"] = qv[idx][..., keep]
@@ -214,8 +214,9 @@ class Shooting:
                     moment = np.zeros((m.nu, m.nv))
                     mujoco.mju_sparse2dense(moment, d.actuator_moment, d.moment_rownnz, d.moment_rowadr,
                                             d.moment_colind)
-                if m.actuator_biasprm[a, 1] != 0:
-                    act[adr], dact[adr] = d.actuator_length[a], moment[a]   # (hinges and slides: nq = nv)
+                if m.actuator_biasprm[a, 1] != 0:   # (the moment [nv] on the positions' columns [nq])
+                    act[adr] = d.actuator_length[a]
+                    dact[adr, self.sys.columns.same_q] = moment[a, self.sys.columns.same_v]
             else:  # filters: at rest under the first command
                 act[adr] = tr.ctrl[0, a]
         return act, dact

@@ -27,6 +27,9 @@ from sim2real.physics.plant import Plant
 from sim2real.sysid.trajectory import ModelColumns
 
 
+ONE_DOF = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+
 class ModelError(ValueError):
     """An MJCF the diagnosis tool cannot use; the message says why."""
 
@@ -47,9 +50,6 @@ def check_model(m: mujoco.MjModel, xml_path: str) -> None:
     """Refuse what the diagnosis cannot handle, naming the joint or actuator."""
     jn = _names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt)
     for j in range(m.njnt):
-        if int(m.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
-            raise ModelError(f"{xml_path}: joint '{jn[j]}' is not a hinge or slide; the diagnosis tool handles "
-                             "hinge/slide joints only")
         if not jn[j]:
             raise ModelError(f"{xml_path}: joint #{j} has no name; name every joint (recordings refer to them)")
     for a in range(m.nu):
@@ -103,7 +103,13 @@ class System:
         jn = self.columns.joints
         self._adapt(m, dt, substeps)
         self.joints = jn
-        self.angles = np.array([m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE for j in range(m.njnt)])  # [nq] (hinges)
+        # [nq]: the position columns that are angles (a hinge's; a quaternion's components are not)
+        self.angles = np.zeros(m.nq, bool)
+        self.angles[[m.jnt_qposadr[j] for j in range(m.njnt) if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]] = True
+        # joint-level effects and declared damping are parameters of one-dof joints (hinges, slides);
+        # a ball or free joint (a floating base) is simulated and measured, its physics left as declared
+        self.one_dof = [j for j in range(m.njnt) if int(m.jnt_type[j]) in ONE_DOF]
+        self.qpos_names, self.dof_names = self.columns.qpos_names, self.columns.dof_names
         self.actuators = self.columns.actuators
         self.bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody)
         moving = [b for b in range(1, m.nbody) if m.body_mass[b] > 0 and self._moves(m, b)]
@@ -111,7 +117,7 @@ class System:
         if mass_above:
             params = [dataclasses.replace(p, high=mass_above * p.default) for p in params]
         declared_fl = {}
-        for j in range(m.njnt):
+        for j in self.one_dof:
             d = float(m.dof_damping[m.jnt_dofadr[j]])
             unit = "N s/m" if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE else "Nm s/rad"
             if d > 0:  # declared damping is a nominal parameter; undeclared is an effect (viscous)
@@ -121,7 +127,7 @@ class System:
             if fl > 0:
                 declared_fl[j] = fl
         params += catalog.actuator_gain_params(m, range(m.nu))
-        effect = catalog.effect_params(m, range(m.njnt), range(m.nu), moving)
+        effect = catalog.effect_params(m, self.one_dof, range(m.nu), moving)
         for i, p in enumerate(effect):  # a declared frictionloss is the Coulomb model's nominal level
             if p.kind == "coulomb" and p.index in declared_fl:
                 effect[i] = Param(p.name, round(declared_fl[p.index], 9), p.low, max(p.high, 100 * declared_fl[p.index]),

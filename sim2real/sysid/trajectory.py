@@ -46,6 +46,8 @@ class Trajectory:
       window: Savitzky-Golay window (samples) used for ``v`` and ``a``.
       sigma_v_t: ``[T, nv]`` standard error of ``v`` at every sample (larger where the motion
         changes fast: the smoothing's local bias).
+      same_q, same_v: the qpos and dof columns whose velocity is their position's rate (every one
+        but a quaternion's; ``ModelColumns``); None: all of them (nq = nv).
     """
 
     name: str
@@ -65,6 +67,8 @@ class Trajectory:
     sigma_force: np.ndarray | None
     window: int
     sigma_v_t: np.ndarray | None = None
+    same_q: np.ndarray | None = None
+    same_v: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.time)
@@ -149,10 +153,24 @@ def choose_window(x: np.ndarray, sigma: np.ndarray, dt: float, max_seconds: floa
     return best
 
 
+# the columns of a joint with several coordinates, ``<joint>:<coordinate>``: a free joint's position
+# (world frame) and orientation quaternion, then its linear (world frame) and angular (body frame)
+# velocity, as MuJoCo orders ``qpos`` and ``qvel``; a ball joint's quaternion and angular velocity
+_COORDS = {int(mujoco.mjtJoint.mjJNT_FREE): (("x", "y", "z", "qw", "qx", "qy", "qz"), ("vx", "vy", "vz", "wx", "wy", "wz")),
+           int(mujoco.mjtJoint.mjJNT_BALL): (("qw", "qx", "qy", "qz"), ("wx", "wy", "wz"))}
+
+
 class ModelColumns:
     """The recording columns a MuJoCo model reads, in model order: ``qpos:<joint>`` (and
     ``qvel:<joint>``, ``qfrc:<joint>``) per joint, ``ctrl:<actuator>`` (and ``force:<actuator>``)
-    per actuator. The diagnosis' ``System`` and SimOpt's recordings path both read through it.
+    per actuator. A free or ball joint has one column per coordinate, ``qpos:<joint>:qw`` etc.
+    (``_COORDS``). The diagnosis' ``System`` and SimOpt's recordings path both read through it.
+
+    Attributes:
+      qpos_names: ``[nq]`` column names after ``qpos:``; dof_names: ``[nv]`` after ``qvel:`` / ``qfrc:``.
+      quats: ``[(qpos address, dof address)]`` of every orientation quaternion (free and ball joints).
+      same_q, same_v: ``[k]`` the qpos and dof addresses of the coordinates whose velocity is their
+        position's rate (hinges, slides, a free joint's position): every one where no quaternion is.
 
     ``source`` names the model in errors (a file path, or e.g. "the env's model").
     """
@@ -163,32 +181,114 @@ class ModelColumns:
         self.actuators = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(m.nu)]
         self.nv = int(m.nv)
         self.dofadr = np.asarray(m.jnt_dofadr).copy()
+        self.qpos_names, self.dof_names, self.quats, same_q, same_v = [], [], [], [], []
+        for j, name in enumerate(self.joints):
+            t, qa, da = int(m.jnt_type[j]), int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+            if t in _COORDS:
+                qc, vc = _COORDS[t]
+                self.qpos_names += [f"{name}:{c}" for c in qc]
+                self.dof_names += [f"{name}:{c}" for c in vc]
+                lin = 3 if t == int(mujoco.mjtJoint.mjJNT_FREE) else 0
+                same_q += range(qa, qa + lin)
+                same_v += range(da, da + lin)
+                self.quats.append((qa + lin, da + lin))
+            else:
+                self.qpos_names.append(name)
+                self.dof_names.append(name)
+                same_q.append(qa)
+                same_v.append(da)
+        self.same_q, self.same_v = np.array(same_q, int), np.array(same_v, int)
 
     def check_recording_covers(self, rec) -> None:
         """Every joint must be measured (the state is set from the data)."""
-        missing = [j for j in self.joints if rec.get("qpos", j) is None]
+        missing = [j for j in self.qpos_names if rec.get("qpos", j) is None]
         if missing:
             from sim2real.sysid.recordings import RecordingError
 
-            raise RecordingError(f"{rec.path}: no qpos column for joint(s) {', '.join(missing)} of the model "
-                                 f"({self.source}); every joint's position must be recorded")
+            raise RecordingError(f"{rec.path}: no qpos column for joint coordinate(s) {', '.join(missing)} of the "
+                                 f"model ({self.source}); every joint's position must be recorded")
 
     def arrays(self, rec):
-        """Recording -> ``(qpos [T, nq], ctrl [T, nu], force [T, nu] or None, qfrc [T, nv])`` in model order."""
+        """Recording -> ``(qpos [T, nq], ctrl [T, nu], force [T, nu] or None, qfrc [T, nv])`` in model
+        order. Quaternions are normalised and their signs made continuous (``q`` and ``-q`` are
+        one orientation; a logger may switch between them)."""
         self.check_recording_covers(rec)
         T = len(rec)
-        qpos = np.stack([rec.get("qpos", j) for j in self.joints], -1)
+        qpos = np.stack([rec.get("qpos", j) for j in self.qpos_names], -1)
+        for qa, _ in self.quats:
+            qpos[:, qa:qa + 4] = continuous_quaternions(qpos[:, qa:qa + 4], rec.path, self.qpos_names[qa])
         ctrl = (np.stack([rec.get("ctrl", a) for a in self.actuators], -1) if self.actuators
                 else np.zeros((T, 0)))
         force = None
         if self.actuators and all(rec.get("force", a) is not None for a in self.actuators):
             force = np.stack([rec.get("force", a) for a in self.actuators], -1)
         qfrc = np.zeros((T, self.nv))
-        for j, name in enumerate(self.joints):
+        for k, name in enumerate(self.dof_names):
             col = rec.get("qfrc", name)
             if col is not None:
-                qfrc[:, self.dofadr[j]] = col
+                qfrc[:, k] = col
         return qpos, ctrl, force, qfrc
+
+    def measured_qvel(self, rec) -> np.ndarray | None:
+        """``[T, nv]`` measured velocities, or None unless every dof's column is there."""
+        if not all(rec.get("qvel", j) is not None for j in self.dof_names):
+            return None
+        return np.stack([rec.get("qvel", j) for j in self.dof_names], -1)
+
+    def rates(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """``[T, nv]`` velocities (or, given second derivatives, accelerations) from positions ``q``
+        and their time derivative ``dq`` (``[T, nq]``). A quaternion's angular velocity in its body's
+        frame, as MuJoCo's ``qvel`` holds it, is ``2 vec(conj(q) dq)``; its acceleration is the same
+        with ``d2q`` (``conj(dq) dq`` is real, so its vector part vanishes)."""
+        out = np.zeros(q.shape[:-1] + (self.nv,))
+        out[..., self.same_v] = dq[..., self.same_q]
+        for qa, da in self.quats:
+            out[..., da:da + 3] = 2.0 * _quat_mul(_conj(q[..., qa:qa + 4]), dq[..., qa:qa + 4])[..., 1:]
+        return out
+
+    def dof_spread(self, per_q: np.ndarray) -> np.ndarray:
+        """``[..., nv]`` an error per dof from errors ``per_q [..., nq]`` of the positions' columns
+        (or of their rates): a quaternion's angular dof twice the RMS of its four components' (``rates``)."""
+        out = np.zeros(per_q.shape[:-1] + (self.nv,))
+        out[..., self.same_v] = per_q[..., self.same_q]
+        for qa, da in self.quats:
+            out[..., da:da + 3] = 2.0 * np.sqrt(np.mean(per_q[..., qa:qa + 4] ** 2, -1, keepdims=True))
+        return out
+
+    def q_spread(self, per_v: np.ndarray) -> np.ndarray:
+        """``[..., nq]`` a spread per position column from one per dof ``per_v [..., nv]``: a
+        quaternion's components move at half its angular velocity's RMS (``dq = q w / 2``)."""
+        out = np.zeros(per_v.shape[:-1] + (len(self.qpos_names),))
+        out[..., self.same_q] = per_v[..., self.same_v]
+        for qa, da in self.quats:
+            out[..., qa:qa + 4] = 0.5 * np.sqrt(np.mean(per_v[..., da:da + 3] ** 2, -1, keepdims=True))
+        return out
+
+
+def _conj(q):
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def _quat_mul(a, b):
+    w1, x1, y1, z1 = np.moveaxis(a, -1, 0)
+    w2, x2, y2, z2 = np.moveaxis(b, -1, 0)
+    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], -1)
+
+
+def continuous_quaternions(q: np.ndarray, path: str = "", column: str = "") -> np.ndarray:
+    """``[T, 4]`` unit quaternions (w, x, y, z) with each sample's sign the one nearer its
+    predecessor's, so that the components are smooth in time; a zero quaternion is refused."""
+    norm = np.linalg.norm(q, axis=-1)
+    if np.any(norm < 1e-6):
+        from sim2real.sysid.recordings import RecordingError
+
+        row = int(np.argmax(norm < 1e-6))
+        raise RecordingError(f"{path}: the quaternion in columns qpos:{column.rsplit(':', 1)[0]}:qw..qz is zero at "
+                             f"data row {row + 1}")
+    q = q / norm[:, None]
+    flip = np.cumsum(np.concatenate([[0], np.sum(q[1:] * q[:-1], -1) < 0])) % 2 == 1
+    return np.where(flip[:, None], -q, q)
 
 
 def _smooth(x, w, dt, deriv):
@@ -237,19 +337,21 @@ def from_recording(rec, system, window: int | None = None, sigma_q: np.ndarray |
     standard error of the velocity estimates there.
     """
     qpos, ctrl, force, qfrc = system.arrays(rec)
+    cols = getattr(system, "columns", system)
     dt = rec.dt
     sigma_q = noise_std(qpos) if sigma_q is None else np.asarray(sigma_q, float)
     w = window or choose_window(qpos, sigma_q, dt)
     w = min(w, len(qpos) - (1 - len(qpos) % 2))
-    v = _smooth(qpos, w, dt, 1)
-    a = _smooth(qpos, w, dt, 2)
-    sigma_v_t = smoothing_error(qpos, w, sigma_q, dt, 1)
+    # velocities [nv] from the positions' derivatives [nq] (the same columns but for quaternions)
+    q_s = _smooth(qpos, w, dt, 0) if cols.quats else qpos
+    v = cols.rates(q_s, _smooth(qpos, w, dt, 1))
+    a = cols.rates(q_s, _smooth(qpos, w, dt, 2))
+    sigma_v_t = cols.dof_spread(smoothing_error(qpos, w, sigma_q, dt, 1))
     if sigma_v is not None:
         sigma_v_t = np.maximum(sigma_v_t, sigma_v)
-    qvel = None
     sigma_qvel = None
-    if all(rec.get("qvel", j) is not None for j in system.joints):
-        qvel = np.stack([rec.get("qvel", j) for j in system.joints], -1)
+    qvel = cols.measured_qvel(rec)
+    if qvel is not None:
         sigma_qvel = noise_std(qvel)
         wv, vm = _smooth_measured(qvel, sigma_qvel, dt)
         s_m = smoothing_error(qvel, wv, sigma_qvel, dt, 0)
@@ -261,7 +363,8 @@ def from_recording(rec, system, window: int | None = None, sigma_q: np.ndarray |
     sigma_v = np.sqrt(np.mean(sigma_v_t**2, 0))
     sigma_force = noise_std(force) if force is not None else None
     return Trajectory(rec.name, rec.path, dt, rec.time - rec.time[0], qpos, v, a, ctrl, qfrc, force, qvel,
-                      sigma_q, sigma_v, sigma_qvel, sigma_force, int(w), sigma_v_t)
+                      sigma_q, sigma_v, sigma_qvel, sigma_force, int(w), sigma_v_t,
+                      *((cols.same_q, cols.same_v) if cols.quats else (None, None)))
 
 
 def command_jumps(ctrl: np.ndarray, share: float = 0.05, typical: float = 10.0) -> np.ndarray:
@@ -303,11 +406,13 @@ def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99) -> tupl
         return _measured_start(tr, idx, jumps, v), a
     t = np.arange(-hw, hw + 1) * tr.dt
     cubic = np.stack([np.ones_like(t), t, t**2, t**3], 1)
+    # (a quaternion's rate is not its angular velocity: its dofs keep the smoothed estimate)
+    sq, sv = (slice(None), slice(None)) if tr.same_q is None else (tr.same_q, tr.same_v)
     shifts = hw + 1
     for n, i in enumerate(idx):
         if i < hw or i + hw >= len(tr.q):
             continue
-        y = tr.q[i - hw: i + hw + 1]
+        y = tr.q[i - hw: i + hw + 1][:, sq]
         rss0 = np.sum((y - cubic @ np.linalg.lstsq(cubic, y, rcond=None)[0]) ** 2, 0)
         best = None
         for s in range(shifts):
@@ -333,8 +438,8 @@ def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99) -> tupl
         before = np.maximum(-tk, 0.0)
         dv = np.concatenate([[0.0, 1.0, 0.0, 0.0], np.ravel([[2 * b, 3 * b**2] for b in before])])
         da = np.concatenate([[0.0, 0.0, 2.0, 0.0], np.ravel([[2.0 * (b > 0), 6 * b] for b in before])])
-        v[n] = np.where(ok, dv @ c, v[n])
-        a[n] = np.where(ok, da @ c, a[n])
+        v[n, sv] = np.where(ok, dv @ c, v[n, sv])
+        a[n, sv] = np.where(ok, da @ c, a[n, sv])
     return v, a
 
 
