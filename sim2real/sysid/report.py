@@ -255,7 +255,7 @@ def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_ro
         units[jn] = "N" if slide else "N m"
     for c in system.qpos_names:   # a ball or free joint's coordinates
         if ":" in c:
-            units[f"qpos:{c}"] = "m" if c.rsplit(":", 1)[1] in "xyz" else ""
+            units[f"qpos:{c}"] = "m" if c.rsplit(":", 1)[1] in "xyz" else "1"   # (a quaternion's components)
     for c in system.dof_names:
         if ":" in c:
             units[f"qvel:{c}"] = "m/s" if c.rsplit(":", 1)[1].startswith("v") else "rad/s"
