@@ -38,6 +38,8 @@ import mujoco
 import numpy as np
 
 from sim2real.physics import kinds
+from sim2real.physics.kinds.base import joint_dofs
+from sim2real.sysid.system import BALL_EFFECTS
 
 # (joint, body, global, actuator hypotheses, in the library's order; each from its kind plug-in)
 _GROUPS = (kinds.JOINT, kinds.BODY, "", kinds.ACTUATOR)
@@ -127,8 +129,8 @@ def scales_from(system, trajs, act_force: np.ndarray) -> Scales:
         d.qpos[:], d.qvel[:], d.qacc[:] = q[k], v[k], a[k]
         mujoco.mj_inverse(m, d)
         frc[i] = d.qfrc_inverse
-    dof = lambda j: m.jnt_dofadr[j]  # noqa: E731
-    F = np.array([np.sqrt(np.mean(frc[:, dof(j)] ** 2)) for j in range(m.njnt)])
+    # per joint, over its dofs (a ball joint's three; one for a hinge or slide)
+    F = np.array([np.sqrt(np.mean(frc[:, joint_dofs(m, j)] ** 2)) for j in range(m.njnt)])
     af = (np.percentile(np.abs(act_force), 99.5, axis=0) if act_force.size else np.zeros(m.nu))
     d.qpos[:] = q.mean(0)
     mujoco.mj_forward(m, d)
@@ -136,7 +138,7 @@ def scales_from(system, trajs, act_force: np.ndarray) -> Scales:
     mujoco.mj_fullM(m, d, M)
     I = np.array([M[m.jnt_dofadr[j], m.jnt_dofadr[j]] for j in range(m.njnt)])
     # per joint (its first dof's, its first coordinate's: a hinge's or slide's only one)
-    speed = np.sqrt(np.mean(v**2, 0))[m.jnt_dofadr]
+    speed = np.array([np.sqrt(np.mean(v[:, joint_dofs(m, j)] ** 2)) for j in range(m.njnt)])
     span = np.ptp(q, 0)[m.jnt_qposadr]
     return Scales(np.maximum(F, 1e-9), np.maximum(speed, 1e-9), np.maximum(span, 1e-9), np.maximum(af, 1e-9), trajs[0].dt,
                   int(system.spec["action_delay"].high), np.maximum(I, 1e-9))
@@ -155,12 +157,14 @@ def library(system, sc: Scales, effects=EFFECTS) -> list[Candidate]:
         out.append(Candidate(effect, target, tuple(params), tuple(tuple(float(x) for x in g) for g in grid),
                              tuple(float(s) for s in scales), tuple(tuple(map(float, r)) for r in search)))
 
-    targets = {kinds.JOINT: system.one_dof, kinds.BODY: range(m.nbody), "": (-1,), kinds.ACTUATOR: range(m.nu)}
+    targets = {kinds.JOINT: sorted(system.one_dof + system.balls), kinds.BODY: range(m.nbody), "": (-1,),
+               kinds.ACTUATOR: range(m.nu)}
     for group in _GROUPS:
         plugins = [k for k in kinds.offering(group) if k.effect in effects]
         for t in targets[group]:
             for k in plugins:
-                k.candidates(system, sc, add, t)
+                if group != kinds.JOINT or t not in system.balls or k.effect in BALL_EFFECTS:
+                    k.candidates(system, sc, add, t)
     return out
 
 

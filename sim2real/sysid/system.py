@@ -28,6 +28,10 @@ from sim2real.sysid.trajectory import ModelColumns
 
 
 ONE_DOF = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+# the joint-level parameters a ball joint has: Coulomb friction and viscous damping (its diagnosis'
+# candidates: ``BALL_EFFECTS``), the same on each of its three dofs
+BALL_KINDS = ("coulomb", "coulomb_asym", "stribeck", "stribeck_vel", "coulomb_vel", "viscous")
+BALL_EFFECTS = ("coulomb_friction", "viscous_damping")
 
 
 class ModelError(ValueError):
@@ -107,8 +111,10 @@ class System:
         self.angles = np.zeros(m.nq, bool)
         self.angles[[m.jnt_qposadr[j] for j in range(m.njnt) if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]] = True
         # joint-level effects and declared damping are parameters of one-dof joints (hinges, slides);
-        # a ball or free joint (a floating base) is simulated and measured, its physics left as declared
+        # a ball joint's friction and damping too (the same level on its three dofs, as MuJoCo's
+        # own); a free joint (a floating base) is simulated and measured, its physics as declared
         self.one_dof = [j for j in range(m.njnt) if int(m.jnt_type[j]) in ONE_DOF]
+        self.balls = [j for j in range(m.njnt) if int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_BALL)]
         self.qpos_names, self.dof_names = self.columns.qpos_names, self.columns.dof_names
         self.actuators = self.columns.actuators
         self.bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody)
@@ -117,7 +123,7 @@ class System:
         if mass_above:
             params = [dataclasses.replace(p, high=mass_above * p.default) for p in params]
         declared_fl = {}
-        for j in self.one_dof:
+        for j in sorted(self.one_dof + self.balls):
             d = float(m.dof_damping[m.jnt_dofadr[j]])
             unit = "N s/m" if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE else "Nm s/rad"
             if d > 0:  # declared damping is a nominal parameter; undeclared is an effect (viscous)
@@ -128,6 +134,7 @@ class System:
                 declared_fl[j] = fl
         params += catalog.actuator_gain_params(m, range(m.nu))
         effect = catalog.effect_params(m, self.one_dof, range(m.nu), moving)
+        effect += [p for p in catalog.effect_params(m, self.balls, (), ()) if p.kind in BALL_KINDS]
         for i, p in enumerate(effect):  # a declared frictionloss is the Coulomb model's nominal level
             if p.kind == "coulomb" and p.index in declared_fl:
                 effect[i] = Param(p.name, round(declared_fl[p.index], 9), p.low, max(p.high, 100 * declared_fl[p.index]),

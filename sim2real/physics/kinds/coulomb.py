@@ -11,7 +11,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from sim2real.physics.kinds.base import JOINT, Kind, add_constant_force, rows, take
+from sim2real.physics.kinds.base import JOINT, Kind, add_constant_force, joint_dofs, rows, take
 
 
 class Coulomb(Kind):
@@ -29,10 +29,11 @@ class Coulomb(Kind):
     effect = "coulomb_friction"
 
     def damping_setup(self, m, spec, cfg):
-        joints = [p.index for _, p in spec.of_kind("coulomb")]
+        # every dof of its joint (a ball joint's three, each with the level, as MuJoCo's frictionloss)
+        joints = [j for _, p in spec.of_kind("coulomb") for j in [p.index] * len(joint_dofs(m, p.index))]
         if not joints:
             return None
-        dofs = np.array([m.jnt_dofadr[j] for j in joints], np.int32)
+        dofs = np.concatenate([joint_dofs(m, p.index) for _, p in spec.of_kind("coulomb")]).astype(np.int32)
         data = {k: rows(spec, k, joints) for k in self.owns}
         data["eps"] = cfg.coulomb_eps
         return dofs, data

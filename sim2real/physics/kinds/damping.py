@@ -2,7 +2,7 @@
 (``joint_damping``) or multiplier (``joint_damping_scale``) for the dofs an env names."""
 from __future__ import annotations
 
-from sim2real.physics.kinds.base import Kind, set_coef
+from sim2real.physics.kinds.base import Kind, joint_dofs, set_coef
 
 
 class Damping(Kind):
@@ -18,7 +18,7 @@ class Damping(Kind):
             if len(dofs):
                 f["dof_damping"] = get("dof_damping").at[dofs].multiply(z[i])
         for i, p in pm.spec.of_kind("dof_damping"):
-            f["dof_damping"] = get("dof_damping").at[pm.mj.jnt_dofadr[p.index]].set(z[i])
+            f["dof_damping"] = get("dof_damping").at[joint_dofs(pm.mj, p.index)].set(z[i])
 
     def export(self, ctx, p, v) -> None:
         if p.kind == "dof_damping":

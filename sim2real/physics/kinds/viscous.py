@@ -1,7 +1,7 @@
 """Viscous damping a model leaves out: added to the joint's declared damping."""
 from __future__ import annotations
 
-from sim2real.physics.kinds.base import JOINT, Kind, add_magnitude, coef, set_coef
+from sim2real.physics.kinds.base import JOINT, Kind, add_magnitude, coef, joint_dofs, set_coef
 
 
 class Viscous(Kind):
@@ -13,7 +13,7 @@ class Viscous(Kind):
 
     def apply(self, pm, z, get, f) -> None:
         for i, p in pm.spec.of_kind("viscous"):
-            f["dof_damping"] = get("dof_damping").at[pm.mj.jnt_dofadr[p.index]].add(z[i])
+            f["dof_damping"] = get("dof_damping").at[joint_dofs(pm.mj, p.index)].add(z[i])
 
     def export(self, ctx, p, v) -> None:
         if v > 0:
