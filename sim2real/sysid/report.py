@@ -202,7 +202,7 @@ def heldout_animation(path, system, sh, tiles, pred_b, pred_a, traj_index, secon
         return out
 
     # per position column: an angle's error in mrad, a length's in mm, a quaternion component's in 1e-3
-    milli = ["mrad" if a else ("mm" if ":" not in c or c.rsplit(":", 1)[1] in "xyz" else "e-3")
+    milli = ["mrad" if a else ("mm" if ":" not in c or c.rsplit(":", 1)[1] in "xyz" else "x 1e-3")
              for a, c in zip(system.angles, joints)]
 
     def captions(q):  # time, and the worst joint's distance from the measured pose
