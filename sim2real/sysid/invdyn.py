@@ -37,7 +37,8 @@ def residual(system, z, trajs, idx) -> dict[str, np.ndarray]:
     cdofs, cf = fx.constant_force(jnp.asarray(z, jnp.float32))
     np.add.at(const, cdofs, np.asarray(cf))  # (a dof may repeat)
     for tr, ix in zip(trajs, idx):
-        q = np.asarray(fx.unsense(jnp.asarray(z, jnp.float32), jnp.asarray(tr.q, jnp.float32)))[ix]
+        # (the sensing hooks take one state [nq]: every sample its own)
+        q = np.asarray(jax.vmap(lambda qm: fx.unsense(jnp.asarray(z, jnp.float32), qm))(jnp.asarray(tr.q[ix], jnp.float32)))
         v, a, u, f = tr.v[ix], tr.a[ix], tr.ctrl[ix], tr.qfrc[ix]
         inv = np.empty_like(v)
         act = np.empty_like(v)
