@@ -154,6 +154,31 @@ def test_a_ball_joint_has_friction_and_damping_on_its_three_dofs(tmp_path):
     assert on_shoulder == {"coulomb_friction"} and "damping:shoulder" in system.nominal
 
 
+def test_inverse_dynamics_takes_a_sensor_offset_out_of_every_sample(tmp_path):
+    """A hinge's sensor offset beside a free joint: the inverse-dynamics residual (the work balance's,
+    the report's) of the recording with the offset equals that of the positions less the offset with
+    none (the sensing hooks take one state, so every sample is unsensed on its own)."""
+    from sim2real.sysid import invdyn
+    from sim2real.sysid.system import System
+    from sim2real.sysid.trajectory import Trajectory
+
+    (tmp_path / "model.xml").write_text(_FREE.replace("FRICTION", ""))
+    system = System(str(tmp_path / "model.xml"), dt=0.01)
+    rng = np.random.default_rng(1)
+    T = 40
+    q = np.tile([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.3], (T, 1)) + 0.01 * rng.standard_normal((T, 8))
+    tr = Trajectory("t", "t", 0.01, np.arange(T) * 0.01, q, rng.normal(0, 1, (T, 7)), rng.normal(0, 1, (T, 7)),
+                    rng.normal(0, 0.3, (T, 1)), np.zeros((T, 7)), None, None, np.full(8, 1e-3), np.full(7, 1e-2),
+                    None, None, 7)
+    z = system.spec.vector({"sensor_offset:elbow": 0.2})
+    shifted = Trajectory(**{**tr.__dict__, "q": q - np.eye(8)[7] * 0.2})
+    ix = [np.arange(10, 30)]
+    with_offset = invdyn.residual(system, z, [tr], ix)["r"]
+    without = invdyn.residual(system, system.spec.vector({}), [shifted], ix)["r"]
+    assert np.allclose(with_offset, without, atol=1e-4)
+    assert not np.allclose(with_offset, invdyn.residual(system, system.spec.vector({}), [tr], ix)["r"], atol=1e-4)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("hidden, param", [('damping="0.02"', "viscous:shoulder"), ('frictionloss="0.02"', "coulomb:shoulder")])
 def test_a_ball_joints_own_damping_or_friction_is_diagnosed(tmp_path, hidden, param):
