@@ -20,7 +20,7 @@ import os
 import mujoco
 import numpy as np
 
-from sim2real.physics import catalog
+from sim2real.physics import catalog, kinds
 from sim2real.physics.kinds.lag import shared_param as shared_lag_param
 from sim2real.physics.params import Param
 from sim2real.physics.plant import Plant
@@ -28,10 +28,10 @@ from sim2real.sysid.trajectory import ModelColumns
 
 
 ONE_DOF = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
-# the joint-level parameters a ball joint has: Coulomb friction and viscous damping (its diagnosis'
-# candidates: ``BALL_EFFECTS``), the same on each of its three dofs
-BALL_KINDS = ("coulomb", "coulomb_asym", "stribeck", "stribeck_vel", "coulomb_vel", "viscous")
+# what a ball joint has of the joint-level effects: Coulomb friction and viscous damping (the same
+# on each of its three dofs), the parameters their plug-ins own
 BALL_EFFECTS = ("coulomb_friction", "viscous_damping")
+BALL_KINDS = tuple(k for kind in kinds.all_kinds() if kind.effect in BALL_EFFECTS for k in kind.owns)
 
 
 class ModelError(ValueError):

@@ -163,10 +163,9 @@ class Kind:
 
 
 def joint_dofs(m: mujoco.MjModel, j: int) -> np.ndarray:
-    """The dofs of joint ``j``: a hinge's or slide's one, a ball joint's three (its angular
-    velocity, body frame), a free joint's six."""
-    n = {int(mujoco.mjtJoint.mjJNT_FREE): 6, int(mujoco.mjtJoint.mjJNT_BALL): 3}.get(int(m.jnt_type[j]), 1)
-    return np.arange(int(m.jnt_dofadr[j]), int(m.jnt_dofadr[j]) + n)
+    """The dofs of joint ``j`` (MuJoCo's ``dof_jntid``): a hinge's or slide's one, a ball joint's
+    three (its angular velocity, body frame), a free joint's six."""
+    return np.flatnonzero(m.dof_jntid == j)
 
 
 def ctrl_limits(m: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:

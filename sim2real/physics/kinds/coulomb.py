@@ -30,10 +30,10 @@ class Coulomb(Kind):
 
     def damping_setup(self, m, spec, cfg):
         # every dof of its joint (a ball joint's three, each with the level, as MuJoCo's frictionloss)
-        joints = [j for _, p in spec.of_kind("coulomb") for j in [p.index] * len(joint_dofs(m, p.index))]
-        if not joints:
+        dofs = np.array([d for _, p in spec.of_kind("coulomb") for d in joint_dofs(m, p.index)], np.int32)
+        if not len(dofs):
             return None
-        dofs = np.concatenate([joint_dofs(m, p.index) for _, p in spec.of_kind("coulomb")]).astype(np.int32)
+        joints = m.dof_jntid[dofs]
         data = {k: rows(spec, k, joints) for k in self.owns}
         data["eps"] = cfg.coulomb_eps
         return dofs, data
