@@ -223,3 +223,43 @@ def test_a_ball_jointed_shoulder_is_diagnosed(tmp_path):
     assert (d["selected"][0]["effect"], d["selected"][0]["target"]) == ("coulomb_friction", "elbow")
     assert d["selected"][0]["params"]["coulomb:elbow"] == pytest.approx(0.05, rel=0.1)
     assert d["fit"]["after"] < 0.5 * d["fit"]["before"]
+
+
+def test_a_start_velocity_near_a_torque_step_is_trusted_only_as_far_as_the_kink_allows(tmp_path):
+    """A conical swing logged at 100 Hz (window 7: too short to refit a kink): at a torque step the
+    smoothed elbow velocity misses the truth's by many times its own error estimate; ``kink_error``
+    (the model's acceleration jump through the window's weights) covers every such miss and is
+    zero away from the steps."""
+    from sim2real.sysid.trajectory import from_recording, kink_error, start_velocity
+
+    model = _BALL.replace("FRICTION", "")
+    m = mujoco.MjModel.from_xml_string(model)
+    truth = mujoco.MjModel.from_xml_string(model.replace('timestep="0.002"', 'timestep="0.0005"'))
+    rng, d, rows, V = np.random.default_rng(3), mujoco.MjData(truth), [], []
+    d.qpos[:4] = [np.cos(0.2), np.sin(0.2), 0.0, 0.0]
+    d.qvel[:3] = [0.0, 0.0, 2.0]
+    for k in range(600):
+        if k % 30 == 0:
+            d.ctrl[:] = rng.uniform(-0.5, 0.5, 1)
+        mujoco.mj_forward(truth, d)
+        V.append(d.qvel + 0.5 * truth.opt.timestep * d.qacc)   # the continuous velocity at the sample
+        rows.append([k / 100, *(d.qpos + 1e-4 * rng.standard_normal(truth.nq)), *d.ctrl])
+        for _ in range(20):
+            mujoco.mj_step(truth, d)
+    cols = ["time", "shoulder:qw", "shoulder:qx", "shoulder:qy", "shoulder:qz", "elbow"]
+    np.savetxt(tmp_path / "run.csv", rows, delimiter=",", comments="",
+               header=",".join([cols[0]] + [f"qpos:{c}" for c in cols[1:]] + ["ctrl:m"]))
+    tr = from_recording(load_all([str(tmp_path / "run.csv")], m, "x")[0], ModelColumns(m, "ball"))
+    assert tr.window == 7
+    idx = np.arange(10, 590)
+    v, a, opened = start_velocity(tr, idx)
+    kink = kink_error(tr, idx, opened, v, m)
+    err = np.abs(v - np.array(V)[idx])
+    near = opened[:, 3]
+    assert near.sum() >= 50 and not kink[~opened].any()
+    elbow = err[near, 3]
+    assert np.sqrt(np.mean(elbow**2)) > 5 * np.sqrt(np.mean(tr.sigma_v_t[idx][near, 3] ** 2))
+    # (the torque about the elbow's y axis moves the elbow and the shoulder's wy, not its wx or wz)
+    moved = opened & (kink > 1e-6 * kink.max())
+    assert moved[:, 3].sum() == near.sum() and not moved[:, [0, 2]].any()
+    assert np.all(err[moved] <= kink[moved] + 3 * tr.sigma_v_t[idx][moved]), (err[moved] - kink[moved]).max()

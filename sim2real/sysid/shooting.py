@@ -30,7 +30,7 @@ from sim2real.envs import parallel
 from sim2real.physics import stepper
 from sim2real.physics.params import clip
 from sim2real.sysid.derivatives import velocity_state
-from sim2real.sysid.trajectory import SPREAD_FLOOR, signal_scale, start_velocity
+from sim2real.sysid.trajectory import SPREAD_FLOOR, kink_error, signal_scale, start_velocity
 
 B = 8  # physics vectors per call
 
@@ -146,15 +146,20 @@ class Shooting:
         # the measured state at every segment start
         st = self.tiles.start
         self.q0 = q_all[st]
-        v_st, a_st = np.empty((S, m.nv)), np.empty((S, m.nv))
+        v_st, a_st, opened = np.empty((S, m.nv)), np.empty((S, m.nv)), np.empty((S, m.nv), bool)
         for r, tr in enumerate(trajs):  # (a start within a command step's window: ``start_velocity``)
             sel = self.tiles.traj == r
-            v_st[sel], a_st[sel] = start_velocity(tr, self.tiles.local[sel])
+            v_st[sel], a_st[sel], opened[sel] = start_velocity(tr, self.tiles.local[sel])
         self.v0 = velocity_state(v_st, a_st, system.h)
-        # each segment's start velocity is trusted as far as the data there allows (``sigma_v_t``)
+        # each segment's start velocity is trusted as far as the data there allows (``sigma_v_t``),
+        # and no further than a command's kink can bend it where that was not refitted
         local = np.stack([trajs[r].sigma_v_t[s] if trajs[r].sigma_v_t is not None else trajs[r].sigma_v
                           for s, r in zip(self.tiles.local, self.tiles.traj)])
-        self.sigma_v = local * 1.5 + 1e-9 * (np.abs(self.v0).max(0) + 1)   # [S, nv]
+        kink = np.zeros((S, m.nv))
+        for r, tr in enumerate(trajs):
+            sel = np.where(self.tiles.traj == r)[0]
+            kink[sel] = kink_error(tr, self.tiles.local[sel], opened[sel], self.v0[sel], system.mj)
+        self.sigma_v = np.hypot(local * 1.5, kink) + 1e-9 * (np.abs(self.v0).max(0) + 1)   # [S, nv]
         # inputs of the jitted function (device arrays, passed as arguments, not baked in)
         act0 = np.zeros((len(trajs), m.na))
         dact = np.zeros((len(trajs), m.na, m.nq))

@@ -380,9 +380,15 @@ def command_jumps(ctrl: np.ndarray, share: float = 0.05, typical: float = 10.0) 
     return np.where((du > limit).any(1))[0] + 1
 
 
-def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99) -> tuple[np.ndarray, np.ndarray]:
+def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Velocity ``[k, nv]`` and acceleration just before ``[k, nv]`` at samples ``idx [k]`` of
-    ``tr``, for starting simulations there: where a command jumps within the smoothing window.
+    ``tr``, for starting simulations there, and ``open [k, nv]``: True where a command jumps
+    within the start's smoothing window and the kink cannot be refitted (a window of 7-11
+    samples, too short for the refit's parameters; a quaternion's dofs; no measured ``qvel``):
+    ``kink_error`` bounds the smoothed estimate's error there. (In a longer window the refit is
+    tried, and where its F test fails the positions show no kink above their noise:
+    ``smoothing_error`` stands.)
 
     A force that steps after a command jump puts a kink in the velocity (the acceleration jumps),
     and a cubic smoothing across it misses the velocity by up to ten times its noise (a
@@ -400,14 +406,18 @@ def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99) -> tupl
     v, a = tr.v[idx].copy(), tr.a[idx].copy()
     hw = tr.window // 2
     jumps = command_jumps(tr.ctrl)
+    opened = np.zeros(v.shape, bool)
     if not len(jumps):
-        return v, a
+        return v, a, opened
     if tr.qvel is not None:
-        return _measured_start(tr, idx, jumps, v), a
+        return _measured_start(tr, idx, jumps, v), a, opened
     t = np.arange(-hw, hw + 1) * tr.dt
     cubic = np.stack([np.ones_like(t), t, t**2, t**3], 1)
     # (a quaternion's rate is not its angular velocity: its dofs keep the smoothed estimate)
     sq, sv = (slice(None), slice(None)) if tr.same_q is None else (tr.same_q, tr.same_v)
+    near = np.min(np.abs(idx[:, None] - jumps[None]), 1) <= hw
+    opened[near] = True
+    opened[np.ix_(near, np.arange(v.shape[1])[sv])] = len(t) < 2 * (4 + 2)   # (too short to refit one jump)
     shifts = hw + 1
     for n, i in enumerate(idx):
         if i < hw or i + hw >= len(tr.q):
@@ -440,7 +450,47 @@ def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99) -> tupl
         da = np.concatenate([[0.0, 0.0, 2.0, 0.0], np.ravel([[2.0 * (b > 0), 6 * b] for b in before])])
         v[n, sv] = np.where(ok, dv @ c, v[n, sv])
         a[n, sv] = np.where(ok, da @ c, a[n, sv])
-    return v, a
+    return v, a, opened
+
+
+def kink_error(tr: Trajectory, idx: np.ndarray, opened: np.ndarray, v0: np.ndarray, m: mujoco.MjModel) -> np.ndarray:
+    """``[k, nv]``: how far a command's kink can bend the smoothed start velocities ``open`` at
+    samples ``idx [k]`` (``start_velocity``), from the acceleration jump the model itself puts in
+    the motion there (0 elsewhere).
+
+    Where the window is too short to refit the kink (7-11 samples: a fast motion logged at
+    100 Hz), the cubic's velocity across a jump of acceleration ``da`` at time ``tau`` is off by
+    ``da * g(tau)`` (``g``: the window's derivative weights on a ramp starting at ``tau``, minus
+    its true slope at 0) -- on a ball-jointed arm's torque steps 0.8 rad/s rms against an error
+    estimate of 0.02, which a fit could only blame on a false delay. ``da`` is the nominal
+    model's: its accelerations at the start state ``v0 [k, nv]`` under the command before and
+    after each jump (``mj_forward``: actuator gains, moment arms and the mass matrix as the
+    simulation has them; an actuator with an activation does not jump). ``tau`` is the jump's
+    time or later (a delay moves the kink), the largest ``|g|`` kept. On such a swing the bound
+    is 1.1 to 39 times the error where the error is above three times its estimate (median 3.3:
+    loose where the step's transient dies within the window; ``tests/test_floating_base.py``).
+    """
+    err = np.zeros(opened.shape)
+    rows = np.where(opened.any(1))[0]
+    if not len(rows):
+        return err
+    jumps = command_jumps(tr.ctrl)
+    hw = tr.window // 2
+    t = np.arange(-hw, hw + 1) * tr.dt
+    cw = savgol_coeffs(tr.window, 3, deriv=1, delta=tr.dt, use="dot")
+    d = mujoco.MjData(m)
+    for n in rows:
+        i = int(idx[n])
+        for k in jumps[np.abs(jumps - i) <= hw]:
+            taus = np.linspace((k - i - 0.5) * tr.dt, hw * tr.dt, 4 * tr.window)
+            g = max(abs(cw @ (np.maximum(t - x, 0.0) ** 2 / 2) - max(-x, 0.0)) for x in taus)
+            acc = []
+            for u in (tr.ctrl[k - 1], tr.ctrl[k]):
+                d.qpos[:], d.qvel[:], d.ctrl[:] = tr.q[i], v0[n], u
+                mujoco.mj_forward(m, d)
+                acc.append(d.qacc.copy())
+            err[n] += g * np.abs(acc[1] - acc[0])
+    return np.where(opened, err, 0.0)
 
 
 def _measured_start(tr: Trajectory, idx: np.ndarray, jumps: np.ndarray, v: np.ndarray) -> np.ndarray:
