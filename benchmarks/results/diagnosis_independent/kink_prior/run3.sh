@@ -22,14 +22,5 @@ wait
 left=$((end - SECONDS))
 [ $left -gt 60 ] && (cd /tmp/new && PYTHONPATH=/tmp/site:/tmp/new timeout $left python3 benchmarks/diagnosis_floating.py \
   list=tuning jobs=16 out=$OUT/f_new work=/tmp/fw_new > $OUT/floating_new.log 2>&1)
-python3 - <<'PY'
-import json, glob, os
-out = {}
-for v in ("new", "old"):
-    for p in glob.glob(f"/tmp/ow_{v}/*/diagnosis/diagnosis.json") + glob.glob(f"/tmp/fw_{v}/*/diagnosis/diagnosis.json"):
-        d = json.load(open(p)); c = p.split("/")[3]
-        out.setdefault(c, {})[v] = {"answer": d["answer"], "after": d["fit"]["after"], "before": d["fit"]["before"],
-                                    "selected": [{k: s[k] for k in ("effect", "target", "params")} for s in d["selected"]]}
-json.dump(out, open(os.environ["OUT"] + "/answers.json", "w"), indent=0)
-PY
+python3 $D/collect.py
 grep -c "^--" $OUT/*.log

@@ -24,14 +24,5 @@ for v in ${VARIANTS:-new old}; do
   done
   cp /tmp/new_trajectory.py sim2real/sysid/trajectory.py; cp /tmp/new_shooting.py sim2real/sysid/shooting.py
 done
-python3 - <<'PY'
-import json, glob, os
-out = {}
-for v in ("new", "old"):
-    for p in glob.glob(f"/tmp/ow_{v}/*/diagnosis/diagnosis.json") + glob.glob(f"/tmp/fw_{v}/*/diagnosis/diagnosis.json"):
-        d = json.load(open(p)); c = p.split("/")[3]
-        out.setdefault(c, {})[v] = {"answer": d["answer"], "after": d["fit"]["after"], "before": d["fit"]["before"],
-                                    "selected": [{k: s[k] for k in ("effect", "target", "params")} for s in d["selected"]]}
-json.dump(out, open(os.environ["OUT"] + "/answers.json", "w"), indent=0)
-PY
+python3 $D/collect.py
 grep -c "^--" $OUT/*.log
