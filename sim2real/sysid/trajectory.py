@@ -383,7 +383,7 @@ def command_jumps(ctrl: np.ndarray, share: float = 0.05, typical: float = 10.0) 
 def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Velocity ``[k, nv]`` and acceleration just before ``[k, nv]`` at samples ``idx [k]`` of
-    ``tr``, for starting simulations there, and ``open [k, nv]``: True where a command jumps
+    ``tr``, for starting simulations there, and ``opened [k, nv]``: True where a command jumps
     within the start's smoothing window and the kink cannot be refitted (a window of 7-11
     samples, too short for the refit's parameters; a quaternion's dofs; no measured ``qvel``):
     ``kink_error`` bounds the smoothed estimate's error there. (In a longer window the refit is
@@ -454,9 +454,9 @@ def start_velocity(tr: Trajectory, idx: np.ndarray, level: float = 0.99
 
 
 def kink_error(tr: Trajectory, idx: np.ndarray, opened: np.ndarray, v0: np.ndarray, m: mujoco.MjModel) -> np.ndarray:
-    """``[k, nv]``: how far a command's kink can bend the smoothed start velocities ``open`` at
-    samples ``idx [k]`` (``start_velocity``), from the acceleration jump the model itself puts in
-    the motion there (0 elsewhere).
+    """``[k, nv]``: how far a command's kink can bend the smoothed start velocities where
+    ``opened [k, nv]`` (``start_velocity``) at samples ``idx [k]``, from the acceleration jump the
+    model itself puts in the motion there (0 elsewhere).
 
     Where the window is too short to refit the kink (7-11 samples: a fast motion logged at
     100 Hz), the cubic's velocity across a jump of acceleration ``da`` at time ``tau`` is off by
