@@ -146,19 +146,18 @@ class Shooting:
         # the measured state at every segment start
         st = self.tiles.start
         self.q0 = q_all[st]
-        v_st, a_st, opened = np.empty((S, m.nv)), np.empty((S, m.nv)), np.empty((S, m.nv), bool)
-        for r, tr in enumerate(trajs):  # (a start within a command step's window: ``start_velocity``)
+        # (a start within a command step's window: ``start_velocity``; where its kink could not be
+        # refitted, how far it can bend the estimate: ``kink_error``)
+        self.v0, kink = np.empty((S, m.nv)), np.empty((S, m.nv))
+        for r, tr in enumerate(trajs):
             sel = self.tiles.traj == r
-            v_st[sel], a_st[sel], opened[sel] = start_velocity(tr, self.tiles.local[sel])
-        self.v0 = velocity_state(v_st, a_st, system.h)
+            v_st, a_st, opened = start_velocity(tr, self.tiles.local[sel])
+            self.v0[sel] = velocity_state(v_st, a_st, system.h)
+            kink[sel] = kink_error(tr, self.tiles.local[sel], opened, self.v0[sel], system.mj)
         # each segment's start velocity is trusted as far as the data there allows (``sigma_v_t``),
         # and no further than a command's kink can bend it where that was not refitted
         local = np.stack([trajs[r].sigma_v_t[s] if trajs[r].sigma_v_t is not None else trajs[r].sigma_v
                           for s, r in zip(self.tiles.local, self.tiles.traj)])
-        kink = np.zeros((S, m.nv))
-        for r, tr in enumerate(trajs):
-            sel = np.where(self.tiles.traj == r)[0]
-            kink[sel] = kink_error(tr, self.tiles.local[sel], opened[sel], self.v0[sel], system.mj)
         self.sigma_v = np.hypot(local * 1.5, kink) + 1e-9 * (np.abs(self.v0).max(0) + 1)   # [S, nv]
         # inputs of the jitted function (device arrays, passed as arguments, not baked in)
         act0 = np.zeros((len(trajs), m.na))
