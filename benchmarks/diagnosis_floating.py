@@ -37,6 +37,8 @@ import numpy as np
 
 from sim2real.common.cli import settings
 
+from diagnosis_independent import _key, _param_errors, named_keys  # one scorer for both benchmarks
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "diagnosis_floating")
 
@@ -247,16 +249,11 @@ def run_case(case: Case, work: str) -> dict:
         row.update(named="error", correct=False, error=f"{type(e).__name__}: {e}"[:300],
                    seconds=round(time.time() - t0, 1), traceback=traceback.format_exc()[-600:])
         return row
-    named = [s["effect"] if s["effect"] == "action_delay" else f"{s['effect']}@{s['target']}" for s in d["selected"]]
-    want = [] if case.effect == "none" else [case.effect if not case.target else f"{case.effect}@{case.target}"]
-    err = ""
+    named = named_keys(d)
+    want = [] if case.effect == "none" else [_key(case.effect, case.target)]
     tp = _truth_param(case)
-    if tp and want and want[0] in named:
-        sel = d["selected"][named.index(want[0])]["params"]
-        v = sel.get(tp[0])
-        if tp[0] == "action_delay_seconds":
-            v = sel.get("action_delay", np.nan) * float(d["sample_period"])
-        err = abs(v / tp[1] - 1) if v is not None else ""
+    errs = _param_errors({"truth_values": {want[0]: dict([tp])}}, d) if tp and want else {}
+    err = errs.get(want[0], "") if want else ""
     row.update(named=" + ".join(named) or "none", correct=sorted(named) == sorted(want), param_error=err,
                heldout_before=d["fit"]["before"], heldout_after=d["fit"]["after"],
                never_worse=d["fit"]["after"] <= d["fit"]["before"] * (1 + 1e-9), seconds=round(time.time() - t0, 1))
