@@ -231,7 +231,7 @@ class Settings:
     kept; out: where the table goes; tag: suffix of its name; jobs: processes; note: a line for the
     test list's log (a run on ``test`` or ``fresh`` is logged there)."""
     split: Literal["tuning", "test", "extra", "focus", "pairs", "servo", "beside", "timing", "combos",
-                   "fresh"] = "tuning"
+                   "pd", "fresh"] = "tuning"
     results: str = ""
     cases: str = ""
     work: str = os.path.join("runs", "sysid_cases")

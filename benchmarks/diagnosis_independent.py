@@ -172,7 +172,7 @@ class Settings:
     diagnosis settings other than the defaults
     (``diagnose.min_gain=0.01``; tuning runs only)."""
     split: Literal["tuning", "test", "all", "extra", "focus", "pairs", "servo", "beside", "timing", "combos",
-                   "fresh"] = "tuning"
+                   "pd", "fresh"] = "tuning"
     only: str = ""
     work: str = os.path.join("runs", "sysid_cases")
     out: str = OUT

@@ -54,6 +54,7 @@ SERVO_SEED = 3700  # first seed of the integrating-servo backlash (tuning) list:
 BESIDE_SEED = 3800  # first seed of the drive-effects (tuning) list: beside_cases()
 TIMING_SEED = 3900  # first seed of the action-delay (tuning) list: timing_cases()
 COMBOS_SEED = 6000  # first seed of the two-effect (tuning) list: combos_cases() (after the fresh list's seeds)
+PD_SEED = 7000  # first seed of the PD-loop timing (tuning) list: pd_cases()
 FRESH_SEED = 4000  # first seed of the fresh test list: build_cases(fresh=True)
 
 
@@ -354,6 +355,8 @@ class Case:
 
     @property
     def split(self) -> str:
+        if self.seed >= PD_SEED:
+            return "pd"
         if self.seed >= COMBOS_SEED:
             return "combos"
         if self.seed >= FRESH_SEED:
@@ -626,11 +629,32 @@ def combos_cases() -> list[Case]:
     return cases
 
 
+def pd_cases() -> list[Case]:
+    """The PD-loop timing list (seeds 7000 and up, split ``pd``), a ninth tuning list made on
+    2026-12-02 after the fresh list's oracle check found a 3-link arm's action delay under a PD
+    loop named as a motor lag where the true delay predicts the validation segments 7 times better
+    (no tuning list had a delay under a PD loop on an arm): on every system with a PD loop, its
+    action delay and a motor lag (on an actuator drawn at random) at each of the three
+    magnitudes, each by a design of its own with the excitation set to the PD loop. Deterministic."""
+    S = systems()
+    rng = np.random.default_rng(20261202)
+    cases: list[Case] = []
+    for name, sysm in S.items():
+        if sysm.pd is None:
+            continue
+        for e in ("action_delay", "motor_lag"):
+            for mag in range(3):
+                t = "" if e == "action_delay" else str(rng.choice([a.name for a in sysm.actuators]))
+                c = _case(PD_SEED + len(cases), S, name, "single", ((e, t, mag),), ())
+                cases.append(dataclasses.replace(c, design=dataclasses.replace(c.design, excitation="pd")))
+    return cases
+
+
 def split_cases(split: str) -> list[Case]:
     """The cases of one list by its name (``tuning``, ``test``, ``extra``, ``focus``, ``pairs``,
-    ``servo``, ``beside``, ``timing``, ``combos``, ``fresh``; ``all``: the first list, both halves)."""
+    ``servo``, ``beside``, ``timing``, ``combos``, ``pd``, ``fresh``; ``all``: the first list, both halves)."""
     made = {"focus": focus_cases, "pairs": pair_cases, "servo": servo_cases, "beside": beside_cases,
-            "timing": timing_cases, "combos": combos_cases,
+            "timing": timing_cases, "combos": combos_cases, "pd": pd_cases,
             "extra": lambda: build_cases(extra=True), "fresh": lambda: build_cases(fresh=True)}
     cases = made.get(split, build_cases)()
     return [c for c in cases if split == "all" or c.split == split]
