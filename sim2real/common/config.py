@@ -93,6 +93,8 @@ def describe(cls, prefix: str = "") -> list[tuple[str, str, str, str]]:
         else:
             default = "(required)"
         kind = f.type if isinstance(f.type, str) else getattr(t, "__name__", str(t))
+        if typing.get_origin(t) is typing.Literal:  # its choices, also where an expression names them
+            kind = "Literal[" + ", ".join(map(repr, typing.get_args(t))) + "]"
         default = default if len(default) <= 30 else default[:27] + "..."
         rows.append((prefix + f.name, kind.replace("typing.", ""), default, docs.get(f.name, "")))
     return rows
