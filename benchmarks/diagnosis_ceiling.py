@@ -230,8 +230,7 @@ class Settings:
     path); cases: instead, a file of case labels, one per line; work: where generated cases are
     kept; out: where the table goes; tag: suffix of its name; jobs: processes; note: a line for the
     test list's log (a run on ``test`` or ``fresh`` is logged there)."""
-    split: Literal["tuning", "test", "extra", "focus", "pairs", "servo", "beside", "timing", "combos",
-                   "pd", "fresh"] = "tuning"
+    split: Literal[sysid_cases.SPLITS] = "tuning"
     results: str = ""
     cases: str = ""
     work: str = os.path.join("runs", "sysid_cases")

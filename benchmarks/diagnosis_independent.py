@@ -171,8 +171,7 @@ class Settings:
     folder; jobs: processes; note: a line for the test-split log (why this look); diagnose:
     diagnosis settings other than the defaults
     (``diagnose.min_gain=0.01``; tuning runs only)."""
-    split: Literal["tuning", "test", "all", "extra", "focus", "pairs", "servo", "beside", "timing", "combos",
-                   "pd", "fresh"] = "tuning"
+    split: Literal[("all",) + sysid_cases.SPLITS] = "tuning"
     only: str = ""
     work: str = os.path.join("runs", "sysid_cases")
     out: str = OUT

@@ -650,6 +650,10 @@ def pd_cases() -> list[Case]:
     return cases
 
 
+SPLITS = ("tuning", "test", "extra", "focus", "pairs", "servo", "beside", "timing", "combos", "pd", "fresh")
+"""Every list's name (the benchmarks' ``split=`` choices; a new list is added here and in ``split_cases``)."""
+
+
 def split_cases(split: str) -> list[Case]:
     """The cases of one list by its name (``tuning``, ``test``, ``extra``, ``focus``, ``pairs``,
     ``servo``, ``beside``, ``timing``, ``combos``, ``pd``, ``fresh``; ``all``: the first list, both halves)."""

@@ -741,9 +741,8 @@ def test_the_case_lists_keep_their_seeds_apart_and_the_test_lists_frozen():
     """Every list of ``benchmarks/sysid_cases.py`` holds only its own split's cases, no seed is in
     two lists, and the two test lists still hash to the fingerprints frozen before their first
     run (a new tuning list, or a change to how pairs are drawn, must leave them as they were)."""
-    names = ("tuning", "test", "extra", "focus", "pairs", "servo", "beside", "timing", "combos", "pd", "fresh")
     seen = {}
-    for name in names:
+    for name in cases.SPLITS:
         for c in cases.split_cases(name):
             assert c.split == name, (c.label, name)
             assert seen.setdefault(c.seed, name) == name, (c.seed, seen[c.seed], name)
