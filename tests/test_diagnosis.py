@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from sim2real.sysid import select
-from sim2real.sysid.diagnose import DiagnoseConfig, diagnose, far_masses, force_scale, relative_change
+from sim2real.sysid.diagnose import (DiagnoseConfig, _typical_ratio, diagnose, far_masses, force_scale, heldout_walk,
+                                     relative_change)
 from sim2real.sysid.trajectory import choose_window, noise_std
 
 # every test here runs a diagnosis: thousands of simulated segments (see conftest.py)
@@ -109,6 +110,16 @@ def test_two_effects_named_as_two(tmp_path):
     d, _ = _run(tmp_path, case)
     assert sorted(_named(d)) == [("action_delay", ""), ("coulomb_friction", "hinge")]
     assert len(d["steps"]) == 3  # none -> one effect -> two
+
+
+@pytest.mark.slow
+def test_an_effect_under_the_heldout_gain_is_dropped_with_all_after_it(tmp_path):
+    """The case above, then again asking each effect a little more held-out gain than the
+    weaker of the two has. (``heldout_walk`` itself: the fast pure test below.)"""
+    design = cases.Design("Euler", 0.001, "geom", 200.0, 8.0, "steps", 1e-4, 0.0, False)
+    case = cases.Case(9004, "pendulum_geared", "double",
+                      (("coulomb_friction", "hinge", 2), ("action_delay", "", 2)), design=design)
+    d, _ = _run(tmp_path, case)
     # an effect must lower the held-out error by ``heldout_gain_first`` (the first) or
     # ``heldout_gain`` (the second) against the step before it: ask a little more than the smaller
     # of the two gains of both and that effect is dropped, with all after it
@@ -126,6 +137,29 @@ def test_two_effects_named_as_two(tmp_path):
 
 # --------------------------------------------------------------------------------------------
 # pieces
+
+def test_the_heldout_walk_judges_the_typical_segment_too():
+    """Steps: the re-fit, a friction, a lag whose pooled held-out error is 5% above the
+    friction's while 39 of 40 segments fall 5x (the one left, a start at rest, doubles): kept
+    with ``heldout_typical`` (off by default), dropped without. The model file's error bounds
+    every kept step."""
+    seg = np.full((3, 40), 0.05)
+    seg[0] *= 4
+    seg[2, 1:] = 0.01
+    seg[2, 0] = 0.1
+    cfg = DiagnoseConfig(model="m.xml", recordings=("a.csv",), heldout_typical=True)
+    ho, joins = [0.18, 0.038, 0.040], [False] * 3
+    assert heldout_walk(ho, 0.64, seg, joins, cfg) == 2
+    assert heldout_walk(ho, 0.64, seg, joins, dataclasses.replace(cfg, heldout_typical=False)) == 1
+    assert heldout_walk(ho, 0.039, seg, joins, cfg) == 1  # the lag's pooled error above the model file's
+    assert heldout_walk(ho, 0.03, seg, joins, cfg) == 0
+    # neither measure lowered by the first effect's gain: nothing after the re-fit is kept
+    flat = np.full((3, 40), 0.05)
+    assert heldout_walk([0.1, 0.0995, 0.05], 0.2, flat, joins, cfg) == 0
+    # ... unless it is the first half of a pair that joined, judged with its second
+    assert heldout_walk([0.1, 0.0995, 0.05], 0.2, flat, [False, True, False], cfg) == 2
+    assert _typical_ratio(seg[1], seg[2]) == pytest.approx(0.2)
+
 
 def test_noise_estimate_gaussian_and_quantised():
     rng = np.random.default_rng(0)
@@ -473,6 +507,30 @@ def test_backward_check_drops_an_effect_a_later_one_made_redundant():
     sel, fit = _selector(fits)
     M, path = sel._prune(steps[-1], steps)
     assert [c.label for c in M.effects] == ["viscous_damping@j", "motor_lag@j"] and path is steps
+
+
+def test_a_delay_and_a_lag_are_ranked_by_the_product_of_their_errors():
+    """``Selector.best``: of a delay and a lag that both pass, the fitted segments' error alone
+    would rank the lag first (2% lower) and so does the sum with the validation's (the fitted
+    error is several times larger); the validation prefers the delay by 13%, and the product of
+    the two errors names it (``SelectConfig.timing_relative``). Other effects keep the sum."""
+    from sim2real.sysid.candidates import Candidate
+    from sim2real.sysid.select import SelectConfig, Trial
+
+    D = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+    L = Candidate("motor_lag", "j", ("motor_lag:j",), ((0.01,),), (0.01,), ((0.0, 0.2),))
+    F = Candidate("viscous_damping", "j", ("damping:j",), ((0.1,),), (1.0,), ((0.0, 1.0),))
+    fits = {frozenset({"action_delay"}): (1020.0, np.full(10, 2.61)),
+            frozenset({"motor_lag@j"}): (1000.0, np.full(10, 3.0)),
+            frozenset({"viscous_damping@j"}): (1020.0, np.full(10, 2.61))}
+    sel, fit = _selector(fits)
+    trials = [Trial(c, 0.5, fit([c], 0, 0), passed=True) for c in (L, D)]
+    assert sel.best(trials).candidate is D
+    sel.cfg = dataclasses.replace(sel.cfg, timing_relative=False)
+    assert sel.best(trials).candidate is L
+    # a damping with the delay's errors: the sum ranks the lag first, as before
+    sel.cfg = dataclasses.replace(sel.cfg, timing_relative=True)
+    assert sel.best([Trial(c, 0.5, fit([c], 0, 0), passed=True) for c in (L, F)]).candidate is L
 
 
 def test_a_pair_that_joined_together_is_judged_as_one_by_the_backward_check():

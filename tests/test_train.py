@@ -26,17 +26,6 @@ def params_of(out):
     return jax.tree_util.tree_leaves(out["state"].params)
 
 
-def test_interrupted_and_resumed_run_equals_uninterrupted(tmp_path):
-    full = train(tiny(tmp_path, "name=full"))
-    part = train(tiny(tmp_path, "name=part", "max_chunks=2"))
-    assert full["state"].update_step[0] == 8 and part["state"].update_step[0] == 4
-    resumed = train(tiny(tmp_path, "name=part", "resume=true"))
-    for a, b in zip(params_of(full), params_of(resumed)):
-        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
-    rows = open(tmp_path / "part" / "metrics.csv").read().strip().splitlines()
-    assert len(rows) == 1 + 8  # header + one row per update, no duplicates from the interruption
-
-
 def test_existing_run_folder_is_not_clobbered(tmp_path):
     train(tiny(tmp_path, "name=r", "max_chunks=1"))
     with pytest.raises(FileExistsError, match="resume=true"):
@@ -187,10 +176,11 @@ def test_updates_where_no_episode_ended_log_nan_not_zero(tmp_path):
 TEST = ["test.every=2", "test.params=[mass:pole]", "test.points=[[0.5],[2.0],[-1.0]]", "test.out_of_bounds=clip"]
 
 
-def test_the_driver_tests_the_policy_between_chunks_and_resumes_its_log(tmp_path):
+def test_the_driver_tests_the_policy_between_chunks_and_a_resumed_run_equals_an_uninterrupted_one(tmp_path):
     """``test``: every seed's deterministic policy on fixed physics before chunks 0, 2, ... and
-    after the last; the last evaluation is the final policy's; an interrupted run's log equals an
-    uninterrupted one's."""
+    after the last; the last evaluation is the final policy's. A run interrupted after 3 of its 4
+    chunks and resumed ends with the uninterrupted run's parameters, metrics and test log.
+    (One test: the two checks share the uninterrupted run, each run a compilation.)"""
     env_cap = ["env_options.episode_length=40", "num_seeds=2"]
     full = train(tiny(tmp_path, "name=full", *env_cap, *TEST))  # 4 chunks of 2 updates
     with np.load(tmp_path / "full" / "test.npz") as f:
@@ -207,8 +197,13 @@ def test_the_driver_tests_the_policy_between_chunks_and_resumes_its_log(tmp_path
         np.testing.assert_allclose(returns[-1, s], np.asarray(r), rtol=1e-5)
     rows = open(tmp_path / "full" / "test.csv").read().strip().splitlines()
     assert rows[0] == "chunk,env_steps,seed,test_return" and len(rows) == 1 + 3 * 2
-    train(tiny(tmp_path, "name=part", *env_cap, *TEST, "max_chunks=3"))
-    train(tiny(tmp_path, "name=part", *env_cap, *TEST, "resume=true"))
+    part = train(tiny(tmp_path, "name=part", *env_cap, *TEST, "max_chunks=3"))
+    assert full["state"].update_step[0] == 8 and part["state"].update_step[0] == 6
+    resumed = train(tiny(tmp_path, "name=part", *env_cap, *TEST, "resume=true"))
+    for a, b in zip(params_of(full), params_of(resumed)):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    rows = open(tmp_path / "part" / "metrics.csv").read().strip().splitlines()
+    assert len(rows) == 1 + 8 * 2  # header + a row per update and seed, none twice from the interruption
     with np.load(tmp_path / "part" / "test.npz") as f:
         assert f["chunk"].tolist() == [0, 2, 4]
         np.testing.assert_array_equal(f["returns"], returns)

@@ -348,9 +348,14 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
     B += [("h2", "Steps"),
           ("p", "Each step is the model with the effects found so far and every nominal parameter re-fitted with "
                 "them: `none` is the model file's own parameters re-fitted, so its held-out error is not the "
-                "\"before\" above (the model file as written). `kept`: what the held-out checks kept."),
-          ("table", ["model", "training objective", "validation objective", "held-out NRMSE", "kept"],
+                "\"before\" above (the model file as written). `typical segment`: the median over held-out "
+                "segments of each one's error against the step before (`none`: against the model file); a few "
+                "segments no model predicts can raise the NRMSE while the rest fall. `kept`: what the held-out "
+                "checks kept."),
+          ("table", ["model", "training objective", "validation objective", "held-out NRMSE", "typical segment",
+                     "kept"],
            [[s["model"], f"{s['objective']:.4g}", f"{s['validation']:.4g}", f"{s['heldout_nrmse']:.4g}",
+             f"{s['heldout_typical_ratio']:.3g}x" if s.get("heldout_typical_ratio") is not None else "",
              "yes" if s["kept"] else "no"] for s in d["steps"]])]
     e = d.get("energy") or {}
     if e.get("candidates"):

@@ -209,6 +209,9 @@ class SelectConfig:
       pair_screen: in the pair search (``Selector._pair``) the candidates not fitted this round are
         screened on top of the best fit, and this many of the best of them (by ``min_score``) are
         fitted together with it too (0: off). ``tuning.md`` step 80.
+      timing_relative: where an action delay and a motor lag both pass, the one whose fitted
+        segments' and validation segments' errors have the lower product is taken, not the one
+        whose sum is lower (``Selector.best``). ``tuning.md`` step 83.
     """
 
     min_gain: float = 0.05
@@ -232,6 +235,7 @@ class SelectConfig:
     timing_restart: float = 0.5
     freeze_at_noise: bool = True
     pair_screen: int = 2
+    timing_relative: bool = True
 
 
 TIMING = ("action_delay", "motor_lag")
@@ -865,11 +869,24 @@ class Selector:
 
     def best(self, passed: list[Trial]) -> Trial:
         """Of the candidates that passed, the one that predicts all the training data best (the
-        validation tail alone can be too short to rank two that both explain it: a delay and a lag
-        at the noise floor, while the fitted part still tells them apart); with plausible masses
-        first (``SelectConfig.plausible_masses``)."""
+        validation tail alone can be too short to rank two that both explain it), but of a delay
+        and a lag the one whose fitted and validation errors have the lower product
+        (``SelectConfig.timing_relative``); with plausible masses first
+        (``SelectConfig.plausible_masses``)."""
         plausible = [t for t in passed if not self.far_masses(t.model)] if self.cfg.plausible_masses else []
-        return min(plausible or passed, key=lambda t: t.model.result.phi + np.sum(t.model.val))
+        pool = plausible or passed
+        best = min(pool, key=lambda t: t.model.result.phi + np.sum(t.model.val))
+        # A delay and a lag shape the command alike with one parameter each. Where both pass, the
+        # sum of the two errors is mostly the fitted segments' (70% of the data, and fitted to),
+        # and 2% there outweighs a validation that prefers the other by 4-13%; the product
+        # weighs the two relative differences alike (tuning lists, every round where one of the
+        # two was true: 3 true delays gained, 6115, 6119, 3913, none lost; over every kind of
+        # candidate, it also lost 6138's stiffness to a payload; ``tuning.md`` step 83)
+        if self.cfg.timing_relative and best.candidate.effect in TIMING:
+            def product(t):
+                return np.log(max(t.model.result.phi, 1e-300)) + np.log(max(float(np.sum(t.model.val)), 1e-300))
+            best = min([best] + [t for t in pool if t.candidate.effect in TIMING], key=product)
+        return best
 
     def _at_model_masses(self, M: Model, trial: Trial) -> Trial:
         """A passing candidate whose fit needs a body mass ``FAR_MASS`` times off, fitted again with
