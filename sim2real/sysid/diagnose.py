@@ -974,8 +974,11 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
             f"`{r['effect']}`" + (f" at {r['target']}" if r["target"] else "")
             + f" (all training data {r['training_error_ratio']:.2f}x the selected effect's error)" for r in indistinguishable)
             + f" predicts the validation segments within {100 * cfg.tie_tolerance:g}% of the selected effect or better; "
-            "the selected one predicts all the training data best; "
-            "recordings with faster or richer commands would tell them apart")
+            + ("the selected one predicts all the training data best; "
+               if all(r["training_error_ratio"] >= 1 for r in indistinguishable) else
+               "the selected one has the lower product of its fitted and validation errors (a delay against a lag, "
+               "`timing_relative`); ")
+            + "recordings with faster or richer commands would tell them apart")
     unconfirmed = _unconfirmed(sel, keep, chosen, spec)
     for r in unconfirmed:
         notes.append(f"not confirmed: `{r['effect']}`" + (f" at {r['target']}" if r["target"] else "")
