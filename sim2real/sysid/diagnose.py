@@ -655,8 +655,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         checked = _nrmse(sh, fitter, [z0] + [M.z for M in steps], check_tiles)
         scores = [float(np.mean(list(nr.values()))) for nr, _ in checked]
         nominal_ho, step_ho = scores[0], scores[1:]
-        keep = heldout_walk(step_ho, nominal_ho, _segment_errors(sh, checked, check_tiles)[1:],
-                            [_pair_at(sel, steps, k) for k in range(len(steps))], cfg)
+        seg = _segment_errors(sh, checked, check_tiles)  # [1 + steps, segments]
+        keep = heldout_walk(step_ho, nominal_ho, seg[1:], [_pair_at(sel, steps, k) for k in range(len(steps))], cfg)
         chosen = steps[keep]
         refit_worse = step_ho[0] > nominal_ho
         dropped = steps[-1].effects[len(chosen.effects):]
@@ -668,6 +668,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             M2, nr2 = grown
             steps = steps[: keep + 1] + [M2]
             checked = checked[: keep + 2] + [nr2]
+            seg = np.concatenate([seg[: keep + 2], _segment_errors(sh, [nr2], check_tiles)])
             step_ho = step_ho[: keep + 1] + [float(np.mean(list(nr2[0].values())))]
             keep += 1
             chosen = M2
@@ -680,7 +681,6 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             answer = "none"
         fitted = 0 if keep == 0 and refit_worse else keep + 1  # index into ``checked``: z0, then steps
         z_fit = chosen.z if fitted else z0
-        seg = _segment_errors(sh, checked, check_tiles)
         step_typical = [_typical_ratio(seg[k], seg[k + 1]) for k in range(len(steps))]
         bar.step(text="writing the report")
         d = _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_worse, answer, z_fit,
@@ -849,36 +849,31 @@ def _nrmse(sh: Shooting, fitter: Fitter, zs, tiles) -> list[tuple[dict, dict]]:
     refined) and the predictions themselves (``[1, k, H, .]`` arrays)."""
     refined = fitter.velocities_many(list(zs), [fitter.v_hat] * len(zs), tiles)
     preds = sh.predict(np.stack([np.asarray(z) for z in zs]), np.stack([v for v, _ in refined]), tiles)
-    names = _signal_names(sh)
     out = []
     for i in range(len(zs)):
         pred = {k: v[i: i + 1] for k, v in preds.items()}
-        nr = {}
-        for key, meas in sh.signals.items():
-            e = pred[key][0] - meas[tiles]
-            ok = pred["ok"][0][..., None] & np.isfinite(e)
-            for k, nm in enumerate(names[key]):
-                std = float(np.std(meas[tiles][..., k])) or 1e-12
-                nr[nm] = float(np.sqrt(np.mean(np.where(ok[..., k], e[..., k], 0.0) ** 2))) / std
+        nr = {nm: float(np.sqrt(np.mean(e ** 2))) / std for nm, e, std in _signal_errors(sh, pred, tiles)}
         out.append((nr, pred))
     return out
 
 
+def _signal_errors(sh: Shooting, pred: dict, tiles):
+    """Per signal of one model's predictions ``pred`` (``[1, k, H, .]`` arrays) on ``tiles``: its
+    name, its errors ``[k, H]`` (0 where the prediction failed) and its spread over ``tiles``."""
+    names = _signal_names(sh)
+    for key, meas in sh.signals.items():
+        e = pred[key][0] - meas[tiles]
+        ok = pred["ok"][0][..., None] & np.isfinite(e)
+        for k, nm in enumerate(names[key]):
+            yield nm, np.where(ok[..., k], e[..., k], 0.0), float(np.std(meas[tiles][..., k])) or 1e-12
+
+
 def _segment_errors(sh: Shooting, checked, tiles) -> np.ndarray:
     """``[models, segments]``: each segment's prediction error of each model of ``checked``
-    (``_nrmse``'s output): per signal the segment's RMS error over the signal's spread on all
-    ``tiles`` (as ``_nrmse`` normalises), averaged over the signals."""
-    out = []
-    for _, pred in checked:
-        per = []
-        for key, meas in sh.signals.items():
-            e = pred[key][0] - meas[tiles]  # [k, H, n]
-            ok = pred["ok"][0][..., None] & np.isfinite(e)
-            std = np.maximum(np.std(meas[tiles], axis=(0, 1)), 1e-12)
-            n_ok = np.maximum(ok.sum(1), 1)
-            per.append(np.sqrt((np.where(ok, e, 0.0) ** 2).sum(1) / n_ok) / std)
-        out.append(np.concatenate(per, axis=1).mean(1))
-    return np.array(out)
+    (``_nrmse``'s output): per signal the segment's RMS error over the signal's spread, as
+    ``_nrmse`` pools them, averaged over the signals."""
+    return np.array([np.mean([np.sqrt(np.mean(e ** 2, axis=1)) / std for _, e, std in _signal_errors(sh, pred, tiles)],
+                             axis=0) for _, pred in checked])
 
 
 def _typical_ratio(before: np.ndarray, after: np.ndarray) -> float:
