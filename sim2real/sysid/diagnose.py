@@ -681,11 +681,10 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             answer = "none"
         fitted = 0 if keep == 0 and refit_worse else keep + 1  # index into ``checked``: z0, then steps
         z_fit = chosen.z if fitted else z0
-        step_typical = [_typical_ratio(seg[k], seg[k + 1]) for k in range(len(steps))]
         bar.step(text="writing the report")
         d = _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_worse, answer, z_fit,
                       checked[0], checked[fitted], step_ho, pred0, trajs, train, held, check_tiles, out, t_start,
-                      energy_rows, step_typical)
+                      energy_rows, seg)
         bar.step(text="done")
         return d
     finally:
@@ -904,7 +903,7 @@ def _effect_row(system, cand, model, dt: float) -> dict:
 
 def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_worse, answer, z_fit,
               check_before, check_after, step_ho, pred0, trajs, train, held, check_tiles, out, t_start,
-              energy_rows=None, step_typical=None) -> dict:
+              energy_rows=None, seg=None) -> dict:
     spec = system.spec
     z0 = spec.default.copy()
     notes = list(system.notes) + list(sel.refits) + list(sel.pruned)
@@ -1009,11 +1008,15 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
            "change": relative_change(before, after),
            "per_signal": {k: {"before": nr_b[k], "after": nr_a[k]} for k in nr_b}}
     step_rows = []
+    # (``seg [1 + steps, segments]``: each held-out segment's error, the model file's first)
     for k, M in enumerate(steps):
         step_rows.append({"model": M.label, "objective": M.result.phi, "validation": float(np.sum(M.val)),
                           "heldout_nrmse": step_ho[k], "kept": k <= keep,
-                          "heldout_typical_ratio": step_typical[k] if step_typical else None,
+                          "heldout_typical_ratio": None if seg is None else _typical_ratio(seg[k], seg[k + 1]),
+                          "heldout_segments": None if seg is None else [float(f"{e:.4g}") for e in seg[k + 1]],
                           "joins_next": _pair_at(sel, steps, k)})
+    if seg is not None:
+        fit["per_segment_before"] = [float(f"{e:.4g}") for e in seg[0]]
     nominal_refit = {n: {"nominal": float(spec[n].default), "fitted": float(z_fit[spec.index(n)]),
                          "std": chosen.result.std.get(n), "unit": spec[n].unit} for n in system.nominal}
     far = far_masses(nominal_refit)

@@ -1,0 +1,79 @@
+"""Every tuning list's cases under one or more diagnosis settings, in one pool over all the host's
+CPU cores (JAX on CPU, one case per core), each finished (case, setting) written at once as one
+JSON line to ``OUT/<setting>.jsonl`` (so a run cut short by the time limit keeps what finished).
+
+    python run_device.py OUT SECONDS [LIST ...]
+
+Settings (``SETTINGS``, name -> ``DiagnoseConfig`` overrides): ``base``, the defaults. The
+settings of a case run next to each other, the two-effect lists first (the longest cases). A
+line holds what the held-out walk and the selection need offline: the steps with each held-out
+segment's error (``heldout_segments``), the model file's (``per_segment_before``), every round's
+candidates."""
+import json
+import os
+import sys
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", ".."))
+import diagnosis_independent as di  # noqa: E402
+import sysid_cases  # noqa: E402
+
+SETTINGS = {"base": {}}
+LISTS = ("combos", "pairs", "tuning", "extra", "focus", "servo", "beside", "timing", "pd")
+
+
+def one(case, name: str) -> str:
+    work = f"/tmp/w_{name}"
+    row = di.run_case(case, work, SETTINGS[name])
+    folder = os.path.join(work, case.label)
+    out = {"case": case.label, "split": case.split, "kind": case.kind, "setting": name,
+           "truth": sorted(di.truth_keys(case)), "named": row.get("named"), "correct": row.get("correct"),
+           "seconds": row.get("seconds"), "answer": row.get("answer")}
+    try:
+        d = json.load(open(os.path.join(folder, "diagnosis", "diagnosis.json")))
+        desc = json.load(open(os.path.join(folder, "truth.json")))
+    except OSError:
+        return json.dumps(out)
+    out.update(named=di.named_keys(d), param_errors=di._param_errors(desc, d), before=d["fit"]["before"],
+               after=d["fit"]["after"], per_segment_before=d["fit"].get("per_segment_before"), steps=d["steps"],
+               rounds=[[{k: c.get(k) for k in ("effect", "target", "screen_score", "passed", "objective",
+                                                 "validation_ratio", "t", "params")}
+                        for c in r["candidates"]] for r in d.get("rounds", [])])
+    return json.dumps(out)
+
+
+def main(out: str, seconds: float, lists: list[str]):
+    import jax
+
+    jax.config.update("jax_num_cpu_devices", 1)  # (JAX not started here: the workers fork)
+    end = time.time() + seconds
+    jobs = [(c, s) for split in lists for c in sysid_cases.split_cases(split) for s in SETTINGS]
+    os.makedirs(out, exist_ok=True)
+    files = {s: open(os.path.join(out, f"{s}.jsonl"), "a") for s in SETTINGS}
+    n = os.cpu_count() or 1
+    print(f"{len(jobs)} runs on {n} processes, {seconds:.0f} s", flush=True)
+    done = 0
+    with ProcessPoolExecutor(n) as ex:
+        pending = {ex.submit(one, c, s): (c.label, s) for c, s in jobs}
+        while pending and time.time() < end:
+            fin, _ = wait(pending, timeout=max(1.0, end - time.time()), return_when=FIRST_COMPLETED)
+            for f in fin:
+                label, s = pending.pop(f)
+                try:
+                    files[s].write(f.result() + "\n")
+                    files[s].flush()
+                except Exception as e:  # noqa: BLE001
+                    print(f"{label} {s}: {type(e).__name__}: {e}", flush=True)
+                done += 1
+        print(f"{done} of {len(jobs)} finished in {seconds - (end - time.time()):.0f} s", flush=True)
+        for f in pending:
+            f.cancel()
+        for p in list(ex._processes.values()):  # the workers still running are cut, not waited for
+            p.kill()
+        os._exit(0)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], float(sys.argv[2]), sys.argv[3:] or list(LISTS))
