@@ -110,6 +110,14 @@ def test_two_effects_named_as_two(tmp_path):
     d, _ = _run(tmp_path, case)
     assert sorted(_named(d)) == [("action_delay", ""), ("coulomb_friction", "hinge")]
     assert len(d["steps"]) == 3  # none -> one effect -> two
+    # each step's error per held-out segment is stored, so the walk can be replayed from the file
+    seg = np.array([d["fit"]["per_segment_before"]] + [s["heldout_segments"] for s in d["steps"]])
+    assert seg.shape[0] == 4 and seg.shape[1] >= 3 and np.all(seg > 0)
+    assert [s["heldout_typical_ratio"] for s in d["steps"]] == pytest.approx(
+        [np.median(seg[k + 1] / seg[k]) for k in range(3)], rel=1e-3)
+    keep = heldout_walk([s["heldout_nrmse"] for s in d["steps"]], d["fit"]["before"], seg[1:],
+                        [s["joins_next"] for s in d["steps"]], DiagnoseConfig())
+    assert [s["kept"] for s in d["steps"]] == [k <= keep for k in range(3)]
 
 
 @pytest.mark.slow

@@ -77,6 +77,32 @@ def main():
     print(f"{len(rows)} cases; {len(usable)} replayed (the pooled walk keeps what the diagnosis kept; "
           f"{right} of them right by their kept steps); {len(mismatch)} not replayable (an energy step "
           f"or the refit rule: {', '.join(c.split('_')[0] for c in mismatch)}); {len(skipped)} without steps\n")
+    print("Where the misses are (by the kept steps against the truth):")
+    where = {}
+    for r, kept, _ in usable:
+        steps, truth = r["steps"], set(r["truth"])
+        named = set(effects(steps[kept]["model"]))
+        if named == truth:
+            continue
+        ever = set().union(*(set(effects(s["model"])) for s in steps))
+        if any(effects(s["model"]) == r["truth"] for s in steps):
+            why = "the true model was a step; the walk kept another"
+        elif not truth:
+            why = "parameter-only: a false effect kept"
+        elif not truth & ever:
+            why = "no true effect ever selected"
+        elif named < truth:
+            why = "part of the truth named, the rest never selected"
+        elif named & truth:
+            why = "part of the truth named, with a false effect"
+        elif truth & ever:
+            why = "a true effect selected, then dropped with what followed it"
+        else:
+            why = "other"
+        where.setdefault(why, []).append(r["case"].split("_")[0] + ("d" if len(truth) > 1 else ""))
+    for why, cases in sorted(where.items(), key=lambda x: -len(x[1])):
+        print(f"  {len(cases):3d} {why}: {' '.join(cases)}")
+    print("  (d: a two-effect case)\n")
     names = list(aggregates(np.ones((2, 10))))
     for name in names:
         moved = []
