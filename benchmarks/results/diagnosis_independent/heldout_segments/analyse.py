@@ -1,5 +1,6 @@
-"""The held-out walk re-run offline on the device run's stored errors (``python analyse.py``; reads
-``device/*.jsonl.gz``, prints what ``analyse.txt`` holds).
+"""The held-out walk re-run offline on the device run's stored errors (``.venv/bin/python
+benchmarks/results/diagnosis_independent/heldout_segments/analyse.py``; reads ``device/*.jsonl.gz``,
+prints what ``analyse.txt`` holds).
 
 The walk (``diagnose.heldout_walk``) keeps a step while it lowers the held-out error of the step
 before; the error is the report's pooled NRMSE, which a few badly predicted segments can rule
@@ -14,28 +15,20 @@ import gzip
 import json
 import os
 
+import sys
+
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "..", ".."))
+from sim2real.sysid.diagnose import DiagnoseConfig, heldout_walk  # noqa: E402
+
+CFG = DiagnoseConfig()
 
 
-def walk(ho, nominal, joins, gain_first=0.01, gain=0.05):
-    """``diagnose.heldout_walk`` at its defaults, on any per-step error ``ho``."""
-    keep, skipped = 0, set()
-    while keep + 1 < len(ho):
-        need = 1 - (gain_first if keep == 0 else gain)
-        if ho[keep + 1] <= need * ho[keep]:
-            keep += 1
-        elif keep + 2 < len(ho) and joins[keep + 1] and ho[keep + 2] <= need * ho[keep]:
-            skipped.add(keep + 1)
-            keep += 2
-        else:
-            break
-    while keep > 0 and ho[keep] > nominal:
-        keep -= 1
-        while keep in skipped:
-            keep -= 1
-    return keep
+def walk(ho, nominal, joins):
+    """``diagnose.heldout_walk`` at its defaults (pooled errors only), on any per-step error ``ho``."""
+    return heldout_walk(list(ho), nominal, np.ones((len(ho), 1)), joins, CFG)
 
 
 def effects(label: str) -> list[str]:
