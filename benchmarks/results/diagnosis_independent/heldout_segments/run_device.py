@@ -8,7 +8,7 @@ Settings (``SETTINGS``, name -> ``DiagnoseConfig`` overrides): ``base``, the def
 settings of a case run next to each other, the two-effect lists first (the longest cases). A
 line holds what the held-out walk and the selection need offline: the steps with each held-out
 segment's error (``heldout_segments``), the model file's (``per_segment_before``), every round's
-candidates."""
+candidates and the validation errors per segment their test compared (``round_tests``)."""
 import json
 import os
 import sys
@@ -41,6 +41,11 @@ def one(case, name: str) -> str:
                rounds=[[{k: c.get(k) for k in ("effect", "target", "screen_score", "passed", "objective",
                                                  "validation_ratio", "t", "params")}
                         for c in r["candidates"]] for r in d.get("rounds", [])])
+    # what replaying each round's test needs (added after the run in device/, whose lines lack it)
+    out["round_tests"] = [{"base": r.get("base"), "base_validation_segments": r.get("base_validation_segments"),
+                           "validation_segments": [c.get("validation_segments") for c in r["candidates"]],
+                           "base_level": [c.get("base_level") for c in r["candidates"]]}
+                          for r in d.get("rounds", [])]
     return json.dumps(out)
 
 
