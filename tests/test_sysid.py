@@ -213,7 +213,7 @@ def test_emps_hardware_diagnosis(tmp_path):
     offset = fc * p.get("coulomb_asym:axis", 0.0)  # the constant force offset during motion
     assert offset == pytest.approx(emps.REFERENCE["offset"], rel=0.3)
     assert d["fit"]["reduction"] >= 0.3
-    for f in ("diagnosis.json", "report.md", "report.html", "fitted.xml", "overlay.png", ".sim2real"):
+    for f in ("diagnosis.json", "report.md", "report.html", "fitted.xml", "overlay.png", "heldout_segments.png", ".sim2real"):
         assert (out / f).exists(), f
     # the HTML page stands alone: every figure of report.md embedded, none linked
     page, md = (out / "report.html").read_text(), (out / "report.md").read_text()

@@ -82,6 +82,27 @@ def steps_plot(path, steps: list[dict]):
     plt.close(fig)
 
 
+def segments_plot(path, steps: list[dict], before: list[float]):
+    """Each step's prediction error on every held-out segment (``heldout_segments``; the model
+    file's, ``before``, in grey). The held-out check pools the segments, so a gain carried by
+    most of them can be undone by one that every model mispredicts, and a pooled gain can come
+    from a few segments alone: this shows which."""
+    fig, ax = plt.subplots(figsize=(6.5, 3.4))
+    x = np.arange(1, len(before) + 1)
+    ax.plot(x, before, "o-", ms=3, lw=0.8, color="C7", label="model file")
+    for k, s in enumerate(steps):
+        ax.plot(x, s["heldout_segments"], "o-" if s["kept"] else "x--", ms=3, lw=0.8, color=f"C{k % 10}",
+                label=("nominal re-fit (none)" if k == 0 else s["model"]) + ("" if s["kept"] else " (not kept)"))
+    ax.set_yscale("log")
+    ax.set_xlabel("held-out segment (in recording order)")
+    ax.set_ylabel("prediction error (NRMSE)")
+    ax.set_title("held-out error per segment after each step (lower is better)", fontsize=9)
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def ranking_plot(path, rows: list[dict], top: int = 14):
     """The first round's screen, best score first (a fitted candidate shows its validation ratio)."""
     rows = rows[:top]
@@ -277,6 +298,10 @@ def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_ro
         images["Work over whole recordings"] = "energy.png"
     steps_plot(os.path.join(out, "steps.png"), d["steps"])
     images["Forward selection"] = "steps.png"
+    per_segment = d["fit"].get("per_segment_before")
+    if per_segment and all(s.get("heldout_segments") for s in d["steps"]):
+        segments_plot(os.path.join(out, "heldout_segments.png"), d["steps"], per_segment)
+        images["Held-out error per segment"] = "heldout_segments.png"
     if d["effects"]:
         ranking_plot(os.path.join(out, "candidates.png"), d["effects"])
         images["Candidate screen"] = "candidates.png"
