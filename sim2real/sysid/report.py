@@ -94,6 +94,7 @@ def segments_plot(path, steps: list[dict], before: list[float]):
         ax.plot(x, s["heldout_segments"], "o-" if s["kept"] else "x--", ms=3, lw=0.8, color=f"C{k % 10}",
                 label=("nominal re-fit (none)" if k == 0 else s["model"]) + ("" if s["kept"] else " (not kept)"))
     ax.set_yscale("log")
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_xlabel("held-out segment (in recording order)")
     ax.set_ylabel("prediction error (NRMSE)")
     ax.set_title("held-out error per segment after each step (lower is better)", fontsize=9)
