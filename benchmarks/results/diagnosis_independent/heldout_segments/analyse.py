@@ -1,5 +1,6 @@
 """The held-out walk re-run offline on the device run's stored errors (``.venv/bin/python
-benchmarks/results/diagnosis_independent/heldout_segments/analyse.py``; reads ``device/*.jsonl.gz``,
+benchmarks/results/diagnosis_independent/heldout_segments/analyse.py``; reads ``device/*.jsonl.gz``
+and ``local_2core/*.jsonl.gz``,
 prints what ``analyse.txt`` holds).
 
 The walk (``diagnose.heldout_walk``) keeps a step while it lowers the held-out error of the step
@@ -51,7 +52,8 @@ def aggregates(seg: np.ndarray) -> dict:
 
 def main():
     rows = []
-    for path in sorted(glob.glob(os.path.join(HERE, "device", "*.jsonl.gz"))):
+    for path in sorted(glob.glob(os.path.join(HERE, "device", "*.jsonl.gz"))
+                       + glob.glob(os.path.join(HERE, "local_2core", "*.jsonl.gz"))):
         rows += [json.loads(line) for line in gzip.open(path, "rt")]
     usable, skipped, mismatch = [], [], []
     for r in rows:
