@@ -22,14 +22,17 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "..", ".."))
+import dataclasses  # noqa: E402
+
 from sim2real.sysid.diagnose import DiagnoseConfig, heldout_walk  # noqa: E402
 
 CFG = DiagnoseConfig()
 
 
-def walk(ho, nominal, joins):
-    """``diagnose.heldout_walk`` at its defaults (pooled errors only), on any per-step error ``ho``."""
-    return heldout_walk(list(ho), nominal, np.ones((len(ho), 1)), joins, CFG)
+def walk(ho, nominal, joins, cfg=CFG):
+    """``diagnose.heldout_walk`` (pooled errors only; its defaults unless ``cfg``), on any per-step
+    error ``ho``."""
+    return heldout_walk(list(ho), nominal, np.ones((len(ho), 1)), joins, cfg)
 
 
 def effects(label: str) -> list[str]:
@@ -113,6 +116,25 @@ def main():
         g, lo = sum("GAINED" in m for m in moved), sum("LOST" in m for m in moved)
         print(f"{name}: {len(moved)} moved, {g} gained, {lo} lost")
         print("\n".join(moved))
+    gains(usable)
+
+
+def gains(usable):
+    """The walk's two gains swept on the pooled errors: right answers, and the cases that move."""
+    print("\nThe walk's gains swept (pooled NRMSE; defaults heldout_gain_first "
+          f"{CFG.heldout_gain_first}, heldout_gain {CFG.heldout_gain}):")
+    for first in (0.0, 0.01, 0.02, 0.05):
+        for later in (0.02, 0.05, 0.08, 0.1, 0.15, 0.2, 0.3):
+            cfg = dataclasses.replace(CFG, heldout_gain_first=first, heldout_gain=later)
+            right, moved = 0, []
+            for r, kept, joins in usable:
+                steps = r["steps"]
+                k = walk([s["heldout_nrmse"] for s in steps], r["before"], joins, cfg)
+                ok = effects(steps[k]["model"]) == r["truth"]
+                right += ok
+                if ok != (effects(steps[kept]["model"]) == r["truth"]):
+                    moved.append(("+" if ok else "-") + r["case"].split("_")[0])
+            print(f"  first {first:g}, later {later:g}: {right} right {' '.join(moved)}")
 
 
 if __name__ == "__main__":
