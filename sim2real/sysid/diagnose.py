@@ -903,7 +903,7 @@ def _effect_row(system, cand, model, dt: float) -> dict:
 
 def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_worse, answer, z_fit,
               check_before, check_after, step_ho, pred0, trajs, train, held, check_tiles, out, t_start,
-              energy_rows=None, seg=None) -> dict:
+              energy_rows, seg) -> dict:
     spec = system.spec
     z0 = spec.default.copy()
     notes = list(system.notes) + list(sel.refits) + list(sel.pruned)
@@ -986,7 +986,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
                 f"effect) or {100 * cfg.heldout_gain:g}% (a later one) against the model before it, so not "
                 "named: " + ", ".join(c.label for c in dropped))
         k = keep + 1  # the first step dropped, where it is still among the steps (an energy step replaces them)
-        if seg is not None and k < len(steps) and steps[k].effects[: len(chosen.effects) + 1] == chosen.effects + dropped[:1]:
+        if k < len(steps):
             # the pooled error can rise while most segments improve (one that every model
             # mispredicts rules it, as on the combos list's 6115) or fall with a few: the count
             # and the figure show the user which, without a verdict (on a held-out plant with no
@@ -1023,11 +1023,10 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     for k, M in enumerate(steps):
         step_rows.append({"model": M.label, "objective": M.result.phi, "validation": float(np.sum(M.val)),
                           "heldout_nrmse": step_ho[k], "kept": k <= keep,
-                          "heldout_typical_ratio": None if seg is None else _typical_ratio(seg[k], seg[k + 1]),
-                          "heldout_segments": None if seg is None else [float(f"{e:.4g}") for e in seg[k + 1]],
+                          "heldout_typical_ratio": _typical_ratio(seg[k], seg[k + 1]),
+                          "heldout_segments": [float(f"{e:.4g}") for e in seg[k + 1]],
                           "joins_next": _pair_at(sel, steps, k)})
-    if seg is not None:
-        fit["per_segment_before"] = [float(f"{e:.4g}") for e in seg[0]]
+    fit["per_segment_before"] = [float(f"{e:.4g}") for e in seg[0]]
     nominal_refit = {n: {"nominal": float(spec[n].default), "fitted": float(z_fit[spec.index(n)]),
                          "std": chosen.result.std.get(n), "unit": spec[n].unit} for n in system.nominal}
     far = far_masses(nominal_refit)

@@ -1,7 +1,6 @@
 """The held-out walk re-run offline on the device run's stored errors (``.venv/bin/python
 benchmarks/results/diagnosis_independent/heldout_segments/analyse.py``; reads ``device/*.jsonl.gz``
-and ``local_2core/*.jsonl.gz``,
-prints what ``analyse.txt`` holds).
+and ``local_2core/*.jsonl.gz``, prints what ``analyse.txt`` holds).
 
 The walk (``diagnose.heldout_walk``) keeps a step while it lowers the held-out error of the step
 before; the error is the report's pooled NRMSE, which a few badly predicted segments can rule
@@ -11,19 +10,17 @@ on other aggregates of the stored per-segment errors (``heldout_segments`` of ea
 gained or lost against the truth. First the replica is checked: on the pooled errors it must
 keep what the diagnosis kept (a case whose energy step added a step cannot be replayed: the
 steps after the kept one were replaced; it is left out)."""
+import dataclasses
 import glob
 import gzip
 import json
 import os
-
 import sys
 
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "..", ".."))
-import dataclasses  # noqa: E402
-
 from sim2real.sysid.diagnose import DiagnoseConfig, heldout_walk  # noqa: E402
 
 CFG = DiagnoseConfig()
@@ -93,10 +90,8 @@ def main():
             why = "part of the truth named, the rest never selected"
         elif named & truth:
             why = "part of the truth named, with a false effect"
-        elif truth & ever:
+        else:  # (a true effect was a step: ``truth & ever``)
             why = "a true effect selected, then dropped with what followed it"
-        else:
-            why = "other"
         where.setdefault(why, []).append(r["case"].split("_")[0] + ("d" if len(truth) > 1 else ""))
     for why, cases in sorted(where.items(), key=lambda x: -len(x[1])):
         print(f"  {len(cases):3d} {why}: {' '.join(cases)}")
