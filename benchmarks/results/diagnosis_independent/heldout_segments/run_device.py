@@ -4,7 +4,9 @@ JSON line to ``OUT/<setting>.jsonl`` (so a run cut short by the time limit keeps
 
     python run_device.py OUT SECONDS [LIST ...]
 
-Settings (``SETTINGS``, name -> ``DiagnoseConfig`` overrides): ``base``, the defaults. The
+Settings (``SETTINGS``, name -> ``DiagnoseConfig`` overrides): ``base``, the defaults, or the
+JSON object in the environment's ``SETTINGS`` (``{"base": {}, "prune15": {"prune_t": 1.5}}``);
+``CASES``: a file of case labels, one per line, to run only those of the lists. The
 settings of a case run next to each other, the two-effect lists first (the longest cases). A
 line holds what the held-out walk and the selection need offline: the steps with each held-out
 segment's error (``heldout_segments``), the model file's (``per_segment_before``), every round's
@@ -20,7 +22,8 @@ sys.path.insert(0, os.path.join(HERE, "..", "..", ".."))
 import diagnosis_independent as di  # noqa: E402
 import sysid_cases  # noqa: E402
 
-SETTINGS = {"base": {}}
+SETTINGS = json.loads(os.environ.get("SETTINGS") or '{"base": {}}')
+ONLY = set(open(os.environ["CASES"]).read().split()) if os.environ.get("CASES") else None
 LISTS = ("combos", "pairs", "tuning", "extra", "focus", "servo", "beside", "timing", "pd")
 
 
@@ -38,6 +41,7 @@ def one(case, name: str) -> str:
         return json.dumps(out)
     out.update(named=di.named_keys(d), param_errors=di._param_errors(desc, d), before=d["fit"]["before"],
                after=d["fit"]["after"], per_segment_before=d["fit"].get("per_segment_before"), steps=d["steps"],
+               pruned=[n for n in d.get("notes", []) if " dropped: " in n],
                rounds=[[{k: c.get(k) for k in ("effect", "target", "screen_score", "passed", "objective",
                                                  "validation_ratio", "t", "params")}
                         for c in r["candidates"]] for r in d.get("rounds", [])])
@@ -54,7 +58,8 @@ def main(out: str, seconds: float, lists: list[str]):
 
     jax.config.update("jax_num_cpu_devices", 1)  # (JAX not started here: the workers fork)
     end = time.time() + seconds
-    jobs = [(c, s) for split in lists for c in sysid_cases.split_cases(split) for s in SETTINGS]
+    jobs = [(c, s) for split in lists for c in sysid_cases.split_cases(split) for s in SETTINGS
+            if ONLY is None or c.label in ONLY]
     os.makedirs(out, exist_ok=True)
     files = {s: open(os.path.join(out, f"{s}.jsonl"), "a") for s in SETTINGS}
     n = os.cpu_count() or 1
