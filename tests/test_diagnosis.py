@@ -621,6 +621,53 @@ def test_the_other_half_of_a_pair_is_screened_on_top_of_the_first():
     assert sel._pair(M, tried) is None and len(screened) == 1
 
 
+def test_the_other_half_is_also_screened_on_top_of_the_fit_that_takes_up_the_most_training_misfit():
+    """``Selector._pair`` (the combos list's 6099: a linear axis's force limit and delay). The lag
+    validates best of the fitted ones (ratio 0.93) but takes up little of the training misfit; the
+    force limit takes up most of it (0.36 of the nominal re-fit's objective) and validates 2.6x
+    worse: the half of a pair whose other half is missing. The delay, screened below zero on the
+    nominal model, was never fitted; screened on top of the lag it stays low, on top of the limit
+    it is the other half, and the pair joins."""
+    from sim2real.sysid.candidates import Candidate
+    from sim2real.sysid.select import Trial
+
+    S = Candidate("actuator_saturation", "j", ("saturation:j",), ((1.0,),), (1.0,), ((0.1, 10.0),))
+    L = Candidate("motor_lag", "j", ("motor_lag:j",), ((0.01,),), (1.0,), ((0.0, 0.2),))
+    D = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+    rng = np.random.default_rng(2)
+    base = 20 + rng.uniform(0, 1, 10)
+    fits = {frozenset(): (5000.0, base),
+            frozenset({S.label}): (1800.0, base * 2.6, 0.0, 1.0),
+            frozenset({L.label}): (4800.0, base * np.r_[0.3, np.ones(9)], 0.0, 0.01),
+            frozenset({S.label, L.label}): (1700.0, base * 2.0, 0.0, 1.0),
+            frozenset({L.label, D.label}): (4700.0, base * np.r_[0.3, np.ones(9)], 0.0, 0.01),
+            frozenset({S.label, D.label}): (50.0, base * 0.01, 0.0, 1.0)}
+    sel, fit = _selector(fits)
+    sel.spec.indices = lambda names: [0]
+    sel.cands = [S, L, D]
+    screened = []
+
+    def screen(M, cands):   # the delay scores high only on top of the limit
+        on = [c.label for c in M.effects]
+        screened.append(on)
+        t = Trial(D, 0.6 if on == [S.label] else 0.001)
+        t.start = (3.0,)
+        return [t]
+
+    sel.screen = screen
+    M = fit([], 0, 0)
+    tried = [Trial(S, 0.6, fit([S], 0, 0), val_ratio=2.6), Trial(L, 0.05, fit([L], 0, 0), val_ratio=0.93)]
+    first, second = sel._pair(M, tried)
+    assert screened == [[L.label], [S.label]]      # the best-validating fit first, then the limit's
+    assert first.candidate is S and second.candidate is D and second.passed
+    assert [c.label for c in second.model.effects] == [S.label, D.label]
+    # where the best-validating fit is also the one that takes up the most, it is screened once
+    screened.clear()
+    fits[frozenset({L.label})] = (1500.0, base * np.r_[0.3, np.ones(9)], 0.0, 0.01)
+    sel._pair(M, [Trial(S, 0.6, fit([S], 0, 0), val_ratio=2.6), Trial(L, 0.05, fit([L], 0, 0), val_ratio=0.93)])
+    assert screened == [[L.label]]
+
+
 def test_a_backlash_beside_a_named_friction_is_fitted_whatever_its_screen_score():
     """``SelectConfig.geared``: once a Coulomb friction is named on a joint, the backlash on that
     joint's actuator joins the candidates fitted in the round (the screen's linearisation in the
