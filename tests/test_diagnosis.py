@@ -579,6 +579,29 @@ def test_a_pair_that_joined_together_is_judged_as_one_by_the_backward_check():
     assert M.effects == [] and "coulomb_friction@j + action_delay were dropped" in sel.pruned[0]
 
 
+def _pair_selector(fits, cands, scored):
+    """``_selector`` for ``Selector._pair``: its screen records ``(effects screened on, candidates
+    screened)`` in the list returned and gives one trial, ``scored(effects on) -> (candidate,
+    score, start)``."""
+    from sim2real.sysid.select import Trial
+
+    sel, fit = _selector(fits)
+    sel.spec.indices = lambda names: [0]
+    sel.cands = list(cands)
+    screened = []
+
+    def screen(M, rest):
+        on = [c.label for c in M.effects]
+        screened.append((on, [c.label for c in rest]))
+        c, score, start = scored(on)
+        t = Trial(c, score)
+        t.start = start
+        return [t]
+
+    sel.screen = screen
+    return sel, fit, screened
+
+
 def test_the_other_half_of_a_pair_is_screened_on_top_of_the_first():
     """``SelectConfig.pair_screen`` (the combos list's 6110: a flywheel's delay and friction): no
     single passes, the delay predicts the validation segments best, and the friction, screened low
@@ -598,18 +621,7 @@ def test_the_other_half_of_a_pair_is_screened_on_top_of_the_first():
             frozenset({L.label}): (3500.0, base * np.r_[0.3, np.ones(9)], 0.0, 0.01),
             frozenset({D.label, L.label}): (2900.0, base * np.r_[0.2, 0.2, np.ones(8)], 0.0, 2.0),
             frozenset({D.label, F.label}): (1000.0, base * 0.1, 0.0, 0.5)}
-    sel, fit = _selector(fits)
-    sel.spec.indices = lambda names: [0]
-    sel.cands = [D, L, F]
-    screened = []
-
-    def screen(M, cands):
-        screened.append(([c.label for c in M.effects], [c.label for c in cands]))
-        t = Trial(F, 0.3)
-        t.start = (0.1,)
-        return [t]
-
-    sel.screen = screen
+    sel, fit, screened = _pair_selector(fits, [D, L, F], lambda on: (F, 0.3, (0.1,)))
     M = fit([], 0, 0)
     tried = [Trial(D, 0.5, fit([D], 0, 0), val_ratio=0.6), Trial(L, 0.6, fit([L], 0, 0), val_ratio=0.9)]
     first, second = sel._pair(M, tried)
@@ -642,30 +654,19 @@ def test_the_other_half_is_also_screened_on_top_of_the_fit_that_takes_up_the_mos
             frozenset({S.label, L.label}): (1700.0, base * 2.0, 0.0, 1.0),
             frozenset({L.label, D.label}): (4700.0, base * np.r_[0.3, np.ones(9)], 0.0, 0.01),
             frozenset({S.label, D.label}): (50.0, base * 0.01, 0.0, 1.0)}
-    sel, fit = _selector(fits)
-    sel.spec.indices = lambda names: [0]
-    sel.cands = [S, L, D]
-    screened = []
-
-    def screen(M, cands):   # the delay scores high only on top of the limit
-        on = [c.label for c in M.effects]
-        screened.append(on)
-        t = Trial(D, 0.6 if on == [S.label] else 0.001)
-        t.start = (3.0,)
-        return [t]
-
-    sel.screen = screen
+    # the delay screens high only on top of the limit
+    sel, fit, screened = _pair_selector(fits, [S, L, D], lambda on: (D, 0.6 if on == [S.label] else 0.001, (3.0,)))
     M = fit([], 0, 0)
     tried = [Trial(S, 0.6, fit([S], 0, 0), val_ratio=2.6), Trial(L, 0.05, fit([L], 0, 0), val_ratio=0.93)]
     first, second = sel._pair(M, tried)
-    assert screened == [[L.label], [S.label]]      # the best-validating fit first, then the limit's
+    assert [on for on, _ in screened] == [[L.label], [S.label]]   # the best-validating fit first, then the limit's
     assert first.candidate is S and second.candidate is D and second.passed
     assert [c.label for c in second.model.effects] == [S.label, D.label]
     # where the best-validating fit is also the one that takes up the most, it is screened once
     screened.clear()
     fits[frozenset({L.label})] = (1500.0, base * np.r_[0.3, np.ones(9)], 0.0, 0.01)
     sel._pair(M, [Trial(S, 0.6, fit([S], 0, 0), val_ratio=2.6), Trial(L, 0.05, fit([L], 0, 0), val_ratio=0.93)])
-    assert screened == [[L.label]]
+    assert [on for on, _ in screened] == [[L.label]]
 
 
 def test_a_backlash_beside_a_named_friction_is_fitted_whatever_its_screen_score():
