@@ -750,7 +750,8 @@ class Selector:
         a candidate that alone predicts worse may be half of the answer (tuning half: a joint
         stiffness that only helps beside a sensor offset, the fourth of four alone). So are the
         best fit and each of the ``pair_screen`` candidates that screen best on top of it, of
-        those not fitted alone (a half the other's misfit hid from the first screen). The
+        those not fitted alone (a half the other's misfit hid from the first screen), and so on
+        top of the fit with the lowest training objective where that is another. The
         pair joins the model if it passes the same test against ``M`` and lowers the validation
         error by ``min_gain`` below each of its members alone. Only on the nominal model: on top
         of a named effect the data are mostly explained, and more pairs tested on the same
