@@ -669,6 +669,43 @@ def test_the_other_half_is_also_screened_on_top_of_the_fit_that_takes_up_the_mos
     assert [on for on, _ in screened] == [[L.label]]
 
 
+def test_a_stand_in_named_early_is_replaced_by_what_screens_best_in_its_place():
+    """``SelectConfig.swap`` (sequential replacement; the combos list's 6097, a linear axis's
+    friction + delay): a band passed the first round best, a stand-in, and the friction joined it;
+    beside the band the delay never screened positive. Taken out, the band's place is screened on
+    top of the friction alone, the delay fitted there predicts the validation segments at a fifth
+    of the band + friction's error, and replaces the band; the path is rebuilt as none -> friction
+    -> friction + delay. A replacement that does not pass leaves the model as it was."""
+    from sim2real.sysid.candidates import Candidate
+
+    B, F = (Candidate(e, "j", (f"{e}:j",), ((0.1,),), (1.0,), ((0.0, 1.0),)) for e in ("backlash", "coulomb_friction"))
+    D = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+    rng = np.random.default_rng(3)
+    base = 10 + rng.uniform(0, 1, 10)
+    fits = {frozenset(): (5000.0, base * 5), frozenset({F.label}): (3000.0, base * 3),
+            frozenset({B.label}): (2000.0, base * 2), frozenset({B.label, F.label}): (1000.0, base),
+            frozenset({F.label, D.label}): (300.0, base * 0.2 * rng.uniform(0.9, 1.1, 10)),
+            frozenset({D.label}): (2500.0, base * 2.5)}   # (the friction's place: nothing screens there)
+    sel, fit, _ = _pair_selector(fits, [B, F, D], lambda on: (D, 0.5 if on == [F.label] else 0.001, (2.0,)))
+    sel.cfg = dataclasses.replace(sel.cfg, swap=True)
+
+    def try_(R, tr):
+        tr.model = fit(R.effects + [tr.candidate], 0, 0)
+        return tr
+
+    sel._try, sel.refits = try_, []
+    steps = [fit([], 0, 0), fit([B], 0, 0), fit([B, F], 0, 0)]
+    M, path = sel._swap(steps[-1], steps)
+    assert [c.label for c in M.effects] == [F.label, D.label]
+    assert [S.label for S in path] == ["none", F.label, f"{F.label} + {D.label}"]
+    assert "action_delay replaced backlash@j" in sel.refits[0]
+    # a replacement that predicts worse is not taken
+    fits[frozenset({F.label, D.label})] = (300.0, base * 1.2)
+    sel.refits = []
+    M, path = sel._swap(steps[-1], steps)
+    assert M is steps[-1] and path is steps and not sel.refits
+
+
 def test_a_backlash_beside_a_named_friction_is_fitted_whatever_its_screen_score():
     """``SelectConfig.geared``: once a Coulomb friction is named on a joint, the backlash on that
     joint's actuator joins the candidates fitted in the round (the screen's linearisation in the

@@ -212,6 +212,13 @@ class SelectConfig:
       timing_relative: where an action delay and a motor lag both pass, the one whose fitted
         segments' and validation segments' errors have the lower product is taken, not the one
         whose sum is lower (``Selector.best``). ``tuning.md`` step 83.
+      swap: after the forward selection, each named effect of a model with two or more is taken
+        out in turn, the candidates not named are screened on top of the rest, and the best is
+        fitted there; it replaces the effect where that model passes the test against the one
+        named (``Selector._swap``, sequential replacement). A stand-in named first hides what it
+        stands in for: beside a band that passed the first round for a linear axis's delay, the
+        delay never screened above zero (the combos list's 6097: screened on top of the friction
+        alone, the delay replaces the band at a validation ratio of 0.22). ``tuning.md`` step 86.
     """
 
     min_gain: float = 0.05
@@ -236,6 +243,7 @@ class SelectConfig:
     freeze_at_noise: bool = True
     pair_screen: int = 2
     timing_relative: bool = True
+    swap: bool = True
 
 
 TIMING = ("action_delay", "motor_lag")
@@ -853,7 +861,49 @@ class Selector:
             M = best.model
             steps.append(M)
             remaining = [c for c in remaining if c.label != best.candidate.label]
+        if self.cfg.swap:
+            M, steps = self._swap(M, steps)
         return self._prune(M, steps)
+
+    def _swap(self, M: Model, steps: list[Model]) -> tuple[Model, list[Model]]:
+        """Sequential replacement (``SelectConfig.swap``): each named effect of ``M`` in turn is
+        taken out, the candidates not named are screened on top of the rest (re-fitted), and the
+        best scoring at least ``min_score`` is fitted there; it replaces the effect where that
+        model passes the test against ``M`` (``_accept``). ``steps`` is then rebuilt as the
+        forward path of the effects named (``_path``); the backward check follows."""
+        if len(M.effects) < 2:
+            return M, steps
+        start = M
+        for c in list(M.effects):
+            if all(e.label != c.label for e in M.effects):
+                continue
+            R = self._without(M, next(e for e in M.effects if e.label == c.label))
+            named = {e.label for e in M.effects}
+            rest = [x for x in self.cands if x.label not in named]
+            self.progress(f"screening {len(rest)} candidates in place of {c.label}")
+            for tr in [t for t in self.screen(R, rest) if t.score >= self.cfg.min_score][:1]:
+                tr = self._try(R, tr)
+                C = tr.model
+                self.validate([C])
+                ok, ratio, t, _ = self._accept(M, C, False)
+                if ok:
+                    self.refits.append(f"{tr.candidate.label} replaced {c.label} (validation ratio {ratio:.3f}, t = {t:.1f})")
+                    M = C
+        if M is start:
+            return M, steps
+        return M, self._path(M, steps)
+
+    def _path(self, M: Model, steps: list[Model]) -> list[Model]:
+        """The forward path of ``M``'s effects: the recorded ``steps`` while they are prefixes of
+        it, then fits of ``M`` without its later effects."""
+        path = [steps[0]]
+        for k in range(1, len(M.effects) + 1):
+            want = [c.label for c in M.effects[:k]]
+            have = next((S for S in steps if [c.label for c in S.effects] == want), None)
+            if have is None:
+                have = M if k == len(M.effects) else self._without_all(M, M.effects[k:])
+            path.append(have)
+        return path
 
     def _geared(self, M: Model, trials: list[Trial], chosen: list[Trial]) -> list[Trial]:
         """The backlash trials on the actuators of joints where ``M`` has a Coulomb friction, not
@@ -997,15 +1047,7 @@ class Selector:
                                f"enough (ratio {ratio:.3f}, t = {t:.1f})")
         if M is start:
             return M, steps
-        # the forward path of what stays: the recorded steps while they are prefixes of it, then fits
-        path = [steps[0]]
-        for k in range(1, len(M.effects) + 1):
-            want = [c.label for c in M.effects[:k]]
-            have = next((S for S in steps if [c.label for c in S.effects] == want), None)
-            if have is None:
-                have = M if k == len(M.effects) else self._without_all(M, M.effects[k:])
-            path.append(have)
-        return M, path
+        return M, self._path(M, steps)   # the forward path of what stays
 
     def _without_all(self, M: Model, drop: list[Candidate]) -> Model:
         R = M
