@@ -875,9 +875,9 @@ class Selector:
             return M, steps
         start = M
         for c in list(M.effects):
-            if all(e.label != c.label for e in M.effects):
+            if not any(e is c for e in M.effects):   # (replaced already: a replacement keeps the others' objects)
                 continue
-            R = self._without(M, next(e for e in M.effects if e.label == c.label))
+            R = self._without(M, c)
             named = {e.label for e in M.effects}
             rest = [x for x in self.cands if x.label not in named]
             self.progress(f"screening {len(rest)} candidates in place of {c.label}")
