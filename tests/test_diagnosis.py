@@ -735,40 +735,6 @@ def test_a_backlash_beside_a_named_friction_is_fitted_whatever_its_screen_score(
     assert sel._geared(M, trials, trials[2:]) == []
 
 
-def test_a_payload_is_fitted_on_a_body_whose_mass_the_fit_held_at_its_limit():
-    """``SelectConfig.at_limit`` (the combos list's 6062, a SCARA's inner-link payload beside a
-    motor lag): the re-fit takes a payload up in its body's mass until the mass stops at its
-    limit, and the payload then screens at the noise. A body whose mass sits at its limit gets its
-    payload fitted whatever its screen score; not one already chosen, not a body below its limit,
-    and not where every mass is at its limit (a force scale); off, nothing."""
-    from sim2real.sysid.candidates import Candidate
-    from sim2real.sysid.fit import Result
-    from sim2real.sysid.select import Model, Trial
-
-    def cand(effect, target):
-        return Candidate(effect, target, (f"{effect}:{target}",), ((0.1,),), (1.0,), ((0.0, 1.0),))
-
-    names = ["mass:inner", "mass:outer", "damping:base"]
-    high = {"mass:inner": 1.6, "mass:outer": 0.8, "damping:base": 1.0}
-    sel, _ = _selector({})
-    sel.spec = type("Spec", (), {"index": lambda self, n: names.index(n),
-                                 "__getitem__": lambda self, n: types.SimpleNamespace(high=high[n])})()
-    sel.cfg = dataclasses.replace(sel.cfg, at_limit=True)
-
-    def model(z):
-        return Model([], Result(np.array(z), np.zeros((1, 1)), [], {}, 1.0, 0.0, 1000, [], 1), None, names)
-
-    trials = [Trial(cand("mass_offset", "inner"), 0.003), Trial(cand("mass_offset", "outer"), -0.1),
-              Trial(cand("motor_lag", "m"), 0.3)]
-    M = model([1.6, 0.41, 0.03])                       # the inner link's mass at its limit
-    assert [t.candidate.label for t in sel._at_limit(M, trials, trials[2:])] == ["mass_offset@inner"]
-    assert sel._at_limit(M, trials, trials[:1]) == []                  # already among those fitted
-    assert sel._at_limit(model([1.2, 0.41, 0.03]), trials, []) == []   # below its limit
-    assert sel._at_limit(model([1.6, 0.8, 0.03]), trials, []) == []    # every mass at its limit
-    sel.cfg = dataclasses.replace(sel.cfg, at_limit=False)
-    assert sel._at_limit(M, trials, []) == []
-
-
 def test_a_backlash_is_fitted_from_other_widths_of_its_grid_too():
     """``SelectConfig.backlash_starts``: a band's fit moves its width little from where it starts,
     so a backlash is also fitted from the best points at other widths of its grid (``Trial.others``,

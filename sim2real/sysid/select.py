@@ -219,12 +219,6 @@ class SelectConfig:
         stands in for: beside a band that passed the first round for a linear axis's delay, the
         delay never screened above zero (the combos list's 6097: screened on top of the friction
         alone, the delay replaces the band at a validation ratio of 0.22). ``tuning.md`` step 86.
-      at_limit: a payload on a body whose mass the model re-fitted at its upper limit
-        (``DiagnoseConfig.mass_above``) is fitted in the round whatever its screen score, unless
-        every re-fitted mass is at its limit (a force scale). The re-fit takes a payload up in its
-        body's mass until that mass stops at the limit, and the payload then screens at the noise:
-        the combos list's 6062 (a SCARA's 0.4 kg inner-link payload beside a motor lag, screened at
-        0.001, never fitted; fitted, named beside the lag). ``tuning.md`` step 87.
     """
 
     min_gain: float = 0.05
@@ -250,7 +244,6 @@ class SelectConfig:
     pair_screen: int = 2
     timing_relative: bool = True
     swap: bool = True
-    at_limit: bool = False
 
 
 TIMING = ("action_delay", "motor_lag")
@@ -836,7 +829,7 @@ class Selector:
             trials = self.screen(M, remaining)
             tried = []
             chosen = [t for t in trials if t.score >= self.cfg.min_score][: self.cfg.top]
-            for tr in chosen + self._geared(M, trials, chosen) + self._at_limit(M, trials, chosen):
+            for tr in chosen + self._geared(M, trials, chosen):
                 self.progress(f"fitting {tr.candidate.label} on top of {M.label}")
                 tried.append(self._try(M, tr))
             self._judge_all(M, tried)
@@ -929,22 +922,6 @@ class Selector:
             if j >= 0 and sysm.joints[j] in rubbing:
                 out.append(t)
         return out
-
-    def _at_limit(self, M: Model, trials: list[Trial], chosen: list[Trial]) -> list[Trial]:
-        """The payload trials on bodies whose mass ``M`` re-fitted at its upper limit
-        (``mass_above``), not among ``chosen`` (``SelectConfig.at_limit``): fitted whatever their
-        screen score. Not where every re-fitted mass is at its limit: that is a force scale (a
-        gain or a force limit the commands always reach), which a payload would only stand in for
-        (a filtered drive's rotor beside its force limit)."""
-        if not self.cfg.at_limit:
-            return []
-        masses = [n for n in M.params if n.startswith("mass:")]
-        capped = {n[len("mass:"):] for n in masses if float(M.z[self.spec.index(n)]) >= 0.999 * float(self.spec[n].high)}
-        if len(capped) == len(masses):
-            return []
-        have = {t.candidate.label for t in chosen}
-        return [t for t in trials if t.candidate.effect == "mass_offset" and t.candidate.target in capped
-                and t.candidate.label not in have and np.isfinite(t.score)]
 
     def best(self, passed: list[Trial]) -> Trial:
         """Of the candidates that passed, the one that predicts all the training data best (the
