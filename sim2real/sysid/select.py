@@ -988,13 +988,12 @@ class Selector:
                 and is_far_mass(float(self.spec[n].default), float(M.z[self.spec.index(n)]))]
 
     def _without(self, M: Model, c: Candidate) -> Model:
-        """``M`` re-fitted without effect ``c`` (its parameters back at their neutral values)."""
+        """``M`` re-fitted without effect ``c`` (its parameters back at their neutral values), not
+        validated: the swap only screens and fits on it (``_without_all`` validates what it returns)."""
         z0 = M.z.copy()
         idx = self.spec.indices(list(c.params))
         z0[idx] = self.spec.default[idx]
-        R = self.fit([e for e in M.effects if e is not c], z0, M.result.v0)
-        self.validate([R])
-        return R
+        return self.fit([e for e in M.effects if e is not c], z0, M.result.v0)
 
     def _units(self, M: Model) -> list[list[Candidate]]:
         """``M``'s effects as the backward check judges them: one by one, except a pair that
@@ -1050,7 +1049,10 @@ class Selector:
         return M, self._path(M, steps)   # the forward path of what stays
 
     def _without_all(self, M: Model, drop: list[Candidate]) -> Model:
+        """``M`` re-fitted without the effects ``drop`` (one at a time, the last first), validated
+        (the backward check judges it; the forward path keeps it)."""
         R = M
         for c in reversed(drop):
             R = self._without(R, c)
+        self.validate([R])
         return R
