@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from sim2real.sysid import select
-from sim2real.sysid.diagnose import (DiagnoseConfig, _typical_ratio, diagnose, far_masses, force_scale, heldout_walk,
-                                     relative_change)
+from sim2real.sysid.diagnose import (DiagnoseConfig, _switched_off, _typical_ratio, diagnose, far_masses, force_scale,
+                                     heldout_walk, relative_change)
 from sim2real.sysid.trajectory import choose_window, noise_std
 
 # every test here runs a diagnosis: thousands of simulated segments (see conftest.py)
@@ -266,6 +266,31 @@ def test_masses_refitted_far_from_the_model_are_reported():
     assert "mass:l1 2.7 -> 70.2 kg (x26)" in note and "mass:l2" in note
     assert "mass:l3" not in note and "damping" not in note
     assert far_masses({"mass:l3": refit["mass:l3"]}) is None
+
+
+def test_a_force_limit_that_all_but_switches_its_actuator_off_is_called_a_stand_in():
+    """The KUKA LWR4+'s swapped split named a 6th-motor force limit of 0.0018 N m: the motor all but
+    off, a stand-in for the torque offsets its lab found. A limit under 5% of the force the model's
+    actuator gives along the recordings (99.5th percentile) says so; one at 35% (the benchmarks'
+    smallest true limit) and other effects do not."""
+    m = mujoco.MjModel.from_xml_string(
+        '<mujoco><worldbody><body><joint name="j" type="hinge"/><geom size=".1" mass="1"/></body></worldbody>'
+        '<actuator><motor name="a0" joint="j"/><motor name="a1" joint="j"/></actuator></mujoco>')
+    system = types.SimpleNamespace(mj=m)
+    rng = np.random.default_rng(0)
+    force = rng.uniform(-1, 1, (1, 40, 25, 2)) * np.array([0.2, 1.0])  # [1, segments, samples, nu]
+    scale = np.percentile(np.abs(force[..., 1]), 99.5)
+
+    def row(lim):
+        return {"params": {"saturation:a1": lim}, "units": {"saturation:a1": "N m"}}
+    sat = types.SimpleNamespace(effect="actuator_saturation", target="a1")
+    note = _switched_off(system, sat, row(0.0018), {"force": force})
+    assert note and "a1 (0.0018 N m)" in note and "switches the actuator off" in note
+    assert f"({scale:.3g}, 99.5th" in note             # the second actuator's own scale, not the first's
+    assert _switched_off(system, sat, row(0.35 * scale), {"force": force}) is None
+    assert _switched_off(system, sat, row(0.03 * scale), {"force": force})  # 3% of a1's scale (15% of a0's)
+    lag = types.SimpleNamespace(effect="motor_lag", target="a1")
+    assert _switched_off(system, lag, {"params": {"lag:a1": 1e-4}, "units": {"lag:a1": "s"}}, {"force": force}) is None
 
 
 def test_a_force_limit_below_every_command_is_reported_as_a_force_scale(tmp_path):

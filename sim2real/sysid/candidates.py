@@ -116,6 +116,12 @@ class Scales:
     inertia: np.ndarray = None
 
 
+def actuator_force_scale(act_force: np.ndarray) -> np.ndarray:
+    """``[nu]``: each actuator's force scale, the 99.5th percentile of ``|act_force [N, nu]|`` (the
+    nominal model's actuator forces along the data; actuator force units, N or N m)."""
+    return np.percentile(np.abs(act_force), 99.5, axis=0) if act_force.size else np.zeros(act_force.shape[-1])
+
+
 def scales_from(system, trajs, act_force: np.ndarray) -> Scales:
     """``act_force [N, nu]``: the nominal model's actuator forces along the data (predicted)."""
     m = system.mj
@@ -131,7 +137,7 @@ def scales_from(system, trajs, act_force: np.ndarray) -> Scales:
         frc[i] = d.qfrc_inverse
     # per joint, over its dofs (a ball joint's three; one for a hinge or slide)
     F = np.array([np.sqrt(np.mean(frc[:, joint_dofs(m, j)] ** 2)) for j in range(m.njnt)])
-    af = (np.percentile(np.abs(act_force), 99.5, axis=0) if act_force.size else np.zeros(m.nu))
+    af = actuator_force_scale(act_force)
     d.qpos[:] = q.mean(0)
     mujoco.mj_forward(m, d)
     M = np.zeros((m.nv, m.nv))

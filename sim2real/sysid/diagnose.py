@@ -29,7 +29,7 @@ from sim2real.common import output
 from sim2real.common.progress import Bar
 from sim2real.physics.kinds.base import actuator_joint
 from sim2real.sysid import energy, invdyn, locate, report
-from sim2real.sysid.candidates import ALL_EFFECTS, EFFECTS, library, scales_from
+from sim2real.sysid.candidates import ALL_EFFECTS, EFFECTS, actuator_force_scale, library, scales_from
 from sim2real.sysid.derivatives import velocity_state
 from sim2real.sysid.export import write_fitted_mjcf
 from sim2real.sysid.fit import Fitter
@@ -904,6 +904,31 @@ def _effect_row(system, cand, model, dt: float) -> dict:
             "std": {n: model.result.std.get(n) for n in cand.params}, "units": {n: spec[n].unit for n in cand.params}}
 
 
+SWITCHED_OFF = 0.05  # a force limit under this share of the actuator's force scale all but switches it off
+
+
+def _switched_off(system, cand, row: dict, pred0: dict) -> str | None:
+    """A force limit fitted so low that the actuator delivers next to nothing (under ``SWITCHED_OFF``
+    of the force the model's actuator gives along the recordings, ``actuator_force_scale``; ``pred0``:
+    the nominal model's predictions, ``force [1, ..., nu]``): the words that say so, else None. A real
+    drive is seldom all but off, so such a fit more likely stands in for what the model lacks (a
+    force offset, a sensor's bias, a wrong gear): the KUKA LWR4+'s 6th motor came out at 0.0018 N m
+    so, where its lab found torque offsets. The benchmarks' true limits are 35-75% of that scale."""
+    if cand.effect != "actuator_saturation":
+        return None
+    a = mujoco.mj_name2id(system.mj, mujoco.mjtObj.mjOBJ_ACTUATOR, cand.target)
+    force = np.asarray(pred0["force"][0])
+    scale = float(actuator_force_scale(force.reshape(-1, system.mj.nu))[a])
+    lim = row["params"].get(f"saturation:{cand.target}")
+    if lim is None or scale <= 0 or lim >= SWITCHED_OFF * scale:
+        return None
+    return (f"the force limit on {cand.target} ({lim:.3g} {row['units'][f'saturation:{cand.target}']}) is "
+            f"{100 * lim / scale:.2g}% of the force the model's actuator gives along these recordings "
+            f"({scale:.3g}, 99.5th percentile): it all but switches the actuator off, which a real drive seldom "
+            "is; it more likely stands in for something the model lacks (a force offset, a sensor's bias, a "
+            "wrong gear) than measures a limit")
+
+
 def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_worse, answer, z_fit,
               check_before, check_after, step_ho, pred0, trajs, train, held, check_tiles, out, t_start,
               energy_rows, seg) -> dict:
@@ -930,6 +955,11 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
             row["note"] = ("found by the energy balance over whole recordings (too slow for the predictions to "
                            f"show): it explains {100 * min(f['explained']):.0f}% or more of the work the model "
                            "misses on every check recording")
+        off = _switched_off(system, c, row, pred0)
+        if off:
+            row["stand_in"] = off
+            row["note"] = (row.get("note", "") + " " + off).strip()
+            notes.append(off)
         selected.append(row)
     # every candidate of every round: screen score, and for the fitted ones the validation test
     rounds = []
