@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from sim2real.sysid import select
-from sim2real.sysid.diagnose import (DiagnoseConfig, _switched_off, _typical_ratio, diagnose, far_masses, force_scale,
-                                     heldout_walk, relative_change)
+from sim2real.sysid.diagnose import (DiagnoseConfig, _effect_row, _switched_off, _typical_ratio, diagnose, far_masses,
+                                     force_scale, heldout_walk, relative_change)
 from sim2real.sysid.trajectory import choose_window, noise_std
 
 # every test here runs a diagnosis: thousands of simulated segments (see conftest.py)
@@ -266,6 +266,29 @@ def test_masses_refitted_far_from_the_model_are_reported():
     assert "mass:l1 2.7 -> 70.2 kg (x26)" in note and "mass:l2" in note
     assert "mass:l3" not in note and "damping" not in note
     assert far_masses({"mass:l3": refit["mass:l3"]}) is None
+
+
+def test_a_parameter_along_an_unidentified_direction_gets_no_std():
+    """The IBM double pendulum's free swing: once the payloads outweigh the rods, their size no
+    longer shows (0.4 kg on one machine, 18.5 kg on another), and the fit's std, which leaves the
+    unidentified directions out, read +- 4e-6. Such a parameter (over half its square in the
+    unidentified combinations) gets no std and is listed; the payload's radius keeps its own."""
+    names = ["mass:upper", "payload:upper", "payload_r:upper"]
+    units = {"mass:upper": "kg", "payload:upper": "kg", "payload_r:upper": "m"}
+    spec = type("Spec", (), {"index": staticmethod(names.index),
+                             "__getitem__": lambda self, n: types.SimpleNamespace(unit=units[n])})()
+    system = types.SimpleNamespace(spec=spec)
+    cand = types.SimpleNamespace(effect="mass_offset", target="upper", params=("payload:upper", "payload_r:upper"))
+
+    def model(unidentified):
+        return types.SimpleNamespace(z=np.array([0.036, 0.396, 0.165]), result=types.SimpleNamespace(
+            std={"payload:upper": 3.8e-6, "payload_r:upper": 1.2e-3}, unidentified=unidentified))
+    row = _effect_row(system, cand, model([{"payload:upper": 0.98}]), 0.0025)
+    assert row["std"] == {"payload:upper": None, "payload_r:upper": 1.2e-3}
+    assert row["unidentified"] == ["payload:upper"] and row["params"]["payload:upper"] == 0.396
+    # a small share (0.3^2 + 0.4^2 = 0.25 of the radius' square) keeps the std
+    row = _effect_row(system, cand, model([{"payload_r:upper": 0.3, "mass:upper": 0.9}, {"payload_r:upper": 0.4}]), 0.0025)
+    assert row["std"] == {"payload:upper": 3.8e-6, "payload_r:upper": 1.2e-3} and "unidentified" not in row
 
 
 def test_a_force_limit_that_all_but_switches_its_actuator_off_is_called_a_stand_in():
