@@ -10,10 +10,15 @@ effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim
 - ``nominal``: PPO on the env's nominal physics;
 - ``oracle``: PPO on the true physics, written in the env's effect parameters;
 - ``udr_wide``: uniform DR over a wide box of what a careful user might randomise (mass,
-  Coulomb friction, delay, damping), without knowing which effect is there;
+  Coulomb friction, delay, damping), without knowing which effect is there (but centred near the
+  plant's values: see ``blind`` below);
+- ``udr_blind``: the same over the ``blind`` box (pendulum, cart-pole), set by a rule that does
+  not look at the plant;
 - ``lsdr``: LSDR's learned Gaussian over the same wide box (no real data);
 - ``simopt``: SimOpt from the same 3 recordings (``real=recordings``, one iteration: REPS on the
   recordings, then retraining), adapting Coulomb friction and delay from the nominal physics;
+- ``simopt_blind``: the same, adapting the ``blind`` box's four parameters (mass, friction, delay,
+  damping) rather than the plant's two;
 - ``diag_dr_1``: the loop, once (``sim2real/tools/loop.py``: record 3 episodes of the nominal policy,
   diagnose, retrain with ``dr.from_diagnosis``; where the diagnosis is unusable -- inconclusive,
   or masses re-fitted more than 10x off -- retrain on the ``wide`` box instead: ``LoopConfig.fallback``);
@@ -60,6 +65,9 @@ SETUPS = {
                  "joint_damping": (0.0, 0.2)},
         "simopt": {"params": ["coulomb:hinge", "action_delay"], "low": [0.0, 0.0], "high": [0.6, 2.0],
                    "init_std": [0.15, 0.5]},
+        # the blind rule (below): Coulomb up to half the 2 N m motor, delay up to the env's 4-step delay line
+        "blind": {"mass:pole": (0.7, 1.3), "coulomb:hinge": (0.0, 1.0), "action_delay": (0.0, 4.0),
+                  "joint_damping": (0.0, 0.2)},
     },
     "cartpole": {  # swing-up
         "config": "configs/cartpole.yaml",
@@ -70,6 +78,9 @@ SETUPS = {
                  "joint_damping": (0.0, 0.01)},
         "simopt": {"params": ["coulomb:slider", "action_delay"], "low": [0.0, 0.0], "high": [6.0, 4.0],
                    "init_std": [1.5, 1.0]},
+        # the blind rule (below): Coulomb up to half the 10 N motor, delay up to the env's 4-step delay line
+        "blind": {"mass:pole": (0.07, 0.13), "coulomb:slider": (0.0, 5.0), "action_delay": (0.0, 4.0),
+                  "joint_damping": (0.0, 0.01)},
     },
     "hopper": {  # GPU scale: configs/hopper.yaml (4096 envs); total_steps=20_000_000 on an H100
         "config": "configs/hopper.yaml",
@@ -82,6 +93,17 @@ SETUPS = {
                    "low": [0.0, 0.0, 0.0, 0.0], "high": [3.0, 0.08, 0.08, 0.08], "init_std": [0.75, 0.02, 0.02, 0.02]},
     },
 }
+# ``blind`` (pendulum and cart-pole only): the wide box as a user would write it who knows the
+# model and its motor but not the plant, fixed on 2026-12-03 before any run with it. The ``wide``
+# boxes above have the plant's true friction and delay at or near their centre (a choice of the
+# first session, kept so that the tables stay comparable); here the same rule for both envs: mass
+# and damping as in ``wide`` (centred on the model's, which the plant shares), Coulomb friction on
+# the driven joint from 0 to half the motor's peak force (more and the task is another), action
+# delay from 0 to the env's delay line (``env_options.max_delay``, 4 control steps). The plant's
+# values then sit at 30% (pendulum: 0.3 of 1 N m, 1.2 of 4 steps) and 60% / 50% (cart-pole) of the
+# box. ``udr_blind`` trains on it; ``simopt_blind`` adapts all four of its parameters (the informed
+# ``simopt`` adapts the plant's two, which a user would have to know), from the model's values
+# with a quarter of each range as its first standard deviation, as ``simopt`` starts.
 # ``lsdr`` learns its distribution inside the ``wide`` box with a plain MLP (the real plant's
 # physics is not an input a deployed policy has), from the box's centre (LSDR's Gaussian).
 
@@ -136,7 +158,8 @@ class Settings:
     diagnose_set: str = ""
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
-METHODS = ("nominal", "oracle", "udr_wide", "lsdr", "simopt", "diag_dr_1", "diag_dr_2", "oracle_ft")
+METHODS = ("nominal", "oracle", "udr_wide", "udr_blind", "lsdr", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2",
+           "oracle_ft")
 
 
 def main(args: Settings):
@@ -172,9 +195,13 @@ def main(args: Settings):
         seeds = range(len(rets)) if seeds is None else seeds
         rows.extend({"method": method, "seed": s, "return": r} for s, r in zip(seeds, rets))
         write(args, setup, rows, diagnoses, seconds, quiet=True)  # each method's scores kept as they come
-        print(f"{method:>10s}: " + ", ".join(f"{r:.1f}" for r in rets) + f"  (mean {np.mean(rets):.1f})", flush=True)
+        print(f"{method:>12s}: " + ", ".join(f"{r:.1f}" for r in rets) + f"  (mean {np.mean(rets):.1f})", flush=True)
 
-    needs_nominal = {"nominal", "simopt", "diag_dr_1", "diag_dr_2", "oracle_ft"} & set(methods)
+    blind = {"udr_blind", "simopt_blind"} & set(methods)
+    if blind and "blind" not in setup:
+        raise SystemExit(f"methods: {', '.join(sorted(blind))} need a blind box; env={args.env} has none "
+                         f"(pendulum, cartpole)")
+    needs_nominal = {"nominal", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2", "oracle_ft"} & set(methods)
     if needs_nominal:
         t = time.time()
         nominal = _train(base, "nominal", work, num_seeds=S)
@@ -197,6 +224,11 @@ def main(args: Settings):
         r = _train(base, "udr_wide", work, num_seeds=S, dr=_wide(setup))
         seconds["udr_wide"] = time.time() - t
         add("udr_wide", _scores(r, plant, args.episodes, S))
+    if "udr_blind" in methods:
+        t = time.time()
+        r = _train(base, "udr_blind", work, num_seeds=S, dr=_wide(setup, "blind"))
+        seconds["udr_blind"] = time.time() - t
+        add("udr_blind", _scores(r, plant, args.episodes, S))
     if "lsdr" in methods:
         t = time.time()
         r = _train(base, "lsdr", work, num_seeds=S, algo="lsdr", algo_options={"dist": "gaussian"}, dr=_wide(setup))
@@ -219,14 +251,16 @@ def main(args: Settings):
         if k < 1 or abs(k * rolls.dt - env_dt) > 1e-6 * env_dt:
             raise SystemExit(f"the plant's log step {rolls.dt:g} s does not divide the env's control step {env_dt:g} s")
         ctrl_rate[s] = save(rolls.every(k), what, os.path.join(work, f"rec_nominal_{s}_ctrl"))
-    if "simopt" in methods:
+    for method in ("simopt", "simopt_blind"):
+        if method not in methods:
+            continue
         t = time.time()
-        so = setup["simopt"]
+        so = setup["simopt"] if method == "simopt" else _blind_simopt(setup)
         rets, ran = [], []
         for s in per_seed:
             paths = ctrl_rate[s]
             cfg = dataclasses.replace(
-                base, name=f"simopt_{s}", out_dir=work, seed=s, num_seeds=1, algo="simopt", updates_per_chunk=1,
+                base, name=f"{method}_{s}", out_dir=work, seed=s, num_seeds=1, algo="simopt", updates_per_chunk=1,
                 progress=False, dr=DRConfig(params=tuple(so["params"]), low=tuple(so["low"]), high=tuple(so["high"])),
                 algo_options=dict(real="recordings", recordings=list(paths), init_std=list(so["init_std"]),
                                   init_ppo_updates=int(base.total_steps // base.ppo.batch_size) - 100,
@@ -234,13 +268,13 @@ def main(args: Settings):
             try:
                 res = train(cfg)
             except RecordingError as e:  # e.g. the nominal policy falls before SimOpt has enough samples
-                _not_run("simopt", s, f"the nominal policy's 3 recordings cannot feed SimOpt ({e})")
+                _not_run(method, s, f"the nominal policy's 3 recordings cannot feed SimOpt ({e})")
                 continue
             rets += _scores(res["run_dir"], plant, args.episodes, 1)
             ran.append(s)
-        seconds["simopt"] = seconds.get("simopt", 0.0) + time.time() - t
+        seconds[method] = seconds.get(method, 0.0) + time.time() - t
         if rets:
-            add("simopt", rets, ran)
+            add(method, rets, ran)
     if "diag_dr_1" in methods or "diag_dr_2" in methods:
         t = time.time()
         r1, r2, s1, s2 = [], [], [], []
@@ -287,10 +321,18 @@ def main(args: Settings):
     write(args, setup, rows, diagnoses, seconds)
 
 
-def _wide(setup: dict):
+def _blind_simopt(setup: dict) -> dict:
+    """SimOpt's search over the ``blind`` box: every one of its parameters, a quarter of each range
+    as the first standard deviation (``simopt``'s own setups start so)."""
+    b = setup["blind"]
+    return {"params": list(b), "low": [v[0] for v in b.values()], "high": [v[1] for v in b.values()],
+            "init_std": [(v[1] - v[0]) / 4 for v in b.values()]}
+
+
+def _wide(setup: dict, box: str = "wide"):
     from sim2real.algos.base import DRConfig
 
-    w = setup["wide"]
+    w = setup[box]
     return DRConfig(params=tuple(w), low=tuple(v[0] for v in w.values()), high=tuple(v[1] for v in w.values()))
 
 
@@ -303,7 +345,7 @@ def _earlier(args, methods, per_seed):
     """Rows, diagnoses and seconds of earlier calls, less what this call replaces: its methods
     (for SimOpt and the loop, only at the seeds it runs)."""
     out = os.path.join(args.out, args.env)
-    seeded = {"simopt", "diag_dr_1", "diag_dr_2"}
+    seeded = {"simopt", "simopt_blind", "diag_dr_1", "diag_dr_2"}
 
     def replaced(r):
         return r["method"] in methods and (r["method"] not in seeded or int(r["seed"]) in per_seed)
@@ -327,7 +369,8 @@ def _earlier(args, methods, per_seed):
     seconds = {}
     try:
         with open(os.path.join(out, "seconds.json")) as f:
-            seconds = {k: v for k, v in json.load(f).items() if k not in methods or k in ("simopt", "diag_dr")}
+            seconds = {k: v for k, v in json.load(f).items()
+                       if k not in methods or k in ("simopt", "simopt_blind", "diag_dr")}
     except FileNotFoundError:
         pass
     if len(per_seed) == args.seeds:  # every seed rerun: their time starts again
