@@ -968,9 +968,8 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
                            f"show): it explains {100 * min(f['explained']):.0f}% or more of the work the model "
                            "misses on every check recording")
         off = _switched_off(system, c, row, pred0)
-        if off:
+        if off:  # (said once, in the notes, which the command line prints too)
             row["stand_in"] = off
-            row["note"] = (row.get("note", "") + " " + off).strip()
             notes.append(off)
         selected.append(row)
     # every candidate of every round: screen score, and for the fitted ones the validation test
