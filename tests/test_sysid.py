@@ -273,6 +273,29 @@ def test_segments_start_the_command_path_from_the_recording(tmp_path):
     assert np.sqrt(np.mean(e_pass1 ** 2)) < 0.5 * np.sqrt(np.mean(e_restart ** 2))
 
 
+def test_a_fit_started_outside_its_range_ends_inside(tmp_path):
+    """A start above a parameter's search range (``bounds``) is brought inside before the first
+    step: every step is clipped into the range, so a fit left at such a start rejected them all
+    and stayed out (the IBM double pendulum's payloads, scaled with the masses, at 4-5x the top
+    of their range). Here a motor lag of 0.1 s fitted within (0, 0.05) s from the truth: every
+    clipped step predicts worse than the start, so without the clip the fit ends at 0.1."""
+    from sim2real.sysid.fit import Fitter
+    from sim2real.sysid.shooting import Shooting
+    from sim2real.sysid.system import System
+    from sim2real.sysid.trajectory import from_recording
+
+    case = Case("pendulum", "motor_lag", "motor", (("motor_lag:motor", 0.1),), noise=0.0, seed=3)
+    path = str(tmp_path / "lag.csv")
+    record(case, path)
+    rec = load(path, _model())
+    system = System(PENDULUM, dt=rec.dt)
+    sh = Shooting(system, [from_recording(rec, system)], 20, val_fraction=0.3)
+    z0 = system.spec.vector({"motor_lag:motor": 0.1})
+    r = Fitter(sh, {"motor_lag:motor": 0.02}).fit(z0, sh.v0, ["motor_lag:motor"], sh.tiles.of("fit"), iters=3,
+                                                  bounds={"motor_lag:motor": (0.0, 0.05)})
+    assert 0.0 <= r.z[system.spec.index("motor_lag:motor")] <= 0.05
+
+
 _PREDICT = """
 import sys
 import numpy as np

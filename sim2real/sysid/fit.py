@@ -182,6 +182,11 @@ class Fitter:
         for k, n in enumerate(names):
             if bounds and n in bounds:
                 lo[k], hi[k] = max(lo[k], bounds[n][0]), min(hi[k], bounds[n][1])
+        # a start outside the range is brought inside first: every step is clipped into it, so a
+        # fit that started outside had every step rejected and stayed there (the IBM double
+        # pendulum's payloads, scaled 25x with the masses by ``Selector._at_model_masses``, sat
+        # at 4-5x their range's top whatever the data said)
+        z[idx] = np.clip(z[idx], lo, hi)
         r0 = self.residuals(z[None], v0[None], tiles)[0]
         phi = self.phi(r0, v0, tiles)
 
