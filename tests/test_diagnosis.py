@@ -269,10 +269,10 @@ def test_masses_refitted_far_from_the_model_are_reported():
 
 
 def test_a_parameter_along_an_unidentified_direction_gets_no_std():
-    """The IBM double pendulum's free swing: once the payloads outweigh the rods, their size no
-    longer shows (0.4 kg on one machine, 18.5 kg on another), and the fit's std, which leaves the
-    unidentified directions out, read +- 4e-6. Such a parameter (over half its square in the
-    unidentified combinations) gets no std and is listed; the payload's radius keeps its own."""
+    """The IBM double pendulum's free swing read payloads of 0.4 kg on one machine and 18.5 kg on
+    another, each +- 4e-6: the fit's std leaves the unidentified directions out. Such a parameter
+    (over half its square in the unidentified combinations) gets no std and is listed; the
+    payload's radius keeps its own."""
     names = ["mass:upper", "payload:upper", "payload_r:upper"]
     units = {"mass:upper": "kg", "payload:upper": "kg", "payload_r:upper": "m"}
     spec = type("Spec", (), {"index": staticmethod(names.index),

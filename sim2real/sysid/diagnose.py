@@ -900,8 +900,8 @@ def _effect_row(system, cand, model, dt: float) -> dict:
     A parameter whose direction lies mostly (over half its square) in the combinations the data
     leave undetermined (``Result.unidentified``) gets no std, and is listed in ``unidentified``: the
     fit's std leaves those directions out, so it would read as exact. (The IBM double pendulum's
-    free swing: payloads of 0.4 kg on one 2-core machine and 18.5 kg on another, each "+- 4e-6":
-    once the point masses outweigh the rods, their size no longer shows, only where they sit.)"""
+    free swing read payloads of 0.4 kg on one 2-core machine and 18.5 kg on another, each "+- 4e-6",
+    from fits left outside their range, ``Fitter.fit``.)"""
     spec = system.spec
     params = {n: float(model.z[spec.index(n)]) for n in cand.params}
     if "action_delay" in params:
