@@ -97,7 +97,7 @@ SETUPS = {
 # model and its motor but not the plant, fixed on 2026-12-03 before any run with it. The ``wide``
 # boxes above have the plant's true friction and delay at or near their centre (a choice of the
 # first session, kept so that the tables stay comparable); here the same rule for both envs: mass
-# and damping as in ``wide`` (centred on the model's, which the plant shares), Coulomb friction on
+# and damping as in ``wide`` (the mass centred on the model's, which the plant shares), Coulomb friction on
 # the driven joint from 0 to half the motor's peak force (more and the task is another), action
 # delay from 0 to the env's delay line (``env_options.max_delay``, 4 control steps). The plant's
 # values then sit at 30% (pendulum: 0.3 of 1 N m, 1.2 of 4 steps) and 60% / 50% (cart-pole) of the
