@@ -964,13 +964,14 @@ class Selector:
             i, nominal = self.spec.index(n), float(self.spec[n].default)
             z0[i] = nominal if is_far_mass(nominal, float(M.z[i])) else M.z[i]
         # start where that scale symmetry puts the fit at these masses: every force and inertia
-        # scaled with them (the far masses' common factor)
+        # scaled with them (the far masses' common factor; ``Fitter.fit`` brings a start scaled
+        # past its range back inside)
         far = self.spec.indices(far_names)
         k = float(np.exp(np.mean(np.log(z0[far] / C.z[far]))))
         for n in C.params:
             p = self.spec[n]
             if n not in masses and (p.unit.startswith("N") or p.unit.startswith("kg")):
-                z0[self.spec.index(n)] = np.clip(C.z[self.spec.index(n)] * k, p.low, p.high)
+                z0[self.spec.index(n)] = C.z[self.spec.index(n)] * k
         C2 = self.fit(C.effects, z0, C.result.v0, hold=tuple(masses))
         self.validate([C2])
         passed, ratio, t, note = self._accept(M, C2, not M.effects)
