@@ -75,6 +75,29 @@ def test_payload_needs_no_site(tmp_path):
     assert "payload_mass_lower" in [mujoco.mj_id2name(fitted, mujoco.mjtObj.mjOBJ_BODY, b) for b in range(fitted.nbody)]
 
 
+def test_a_payload_at_the_top_of_its_range_is_searched_wider(tmp_path):
+    """``select._at_edge``: a payload's range ends at 5x its body's mass. The arm of
+    ``test_payload_needs_no_site`` (0.24 kg at the lower link's tip) with the lower link's mass
+    written as 0.04 kg where it is 0.3: its re-fit stops at 2x (``mass_above``), the payload's fit
+    ends at its range's top (0.2 kg), is fitted again in a range 4x wider and the note says so."""
+    design = cases.Design("Euler", 0.001, "geom", 200.0, 8.0, "multisine", 3e-4, 0.0, True)
+    case = cases.Case(9002, "arm2", "single", (("mass_offset", "lower", 2),), design=design)
+    folder = tmp_path / "case"
+    cases.generate(case, str(folder))
+    xml = (folder / "nominal.xml").read_text()
+    light = xml.replace('fromto="0 0 0 0 0 -0.25" mass="0.3"', 'fromto="0 0 0 0 0 -0.25" mass="0.04"')
+    assert light != xml
+    (folder / "nominal.xml").write_text(light)
+    d = diagnose(DiagnoseConfig(model=str(folder / "nominal.xml"),
+                                recordings=(str(folder / "train_0.csv"), str(folder / "train_1.csv")),
+                                heldout=(str(folder / "heldout.csv"),), out=str(tmp_path / "diag"), plots=False,
+                                progress=False))
+    assert d["selected"][0]["effect"] == "mass_offset" and d["selected"][0]["target"] == "lower"
+    (c,) = [c for c in d["rounds"][0]["candidates"] if (c["effect"], c["target"]) == ("mass_offset", "lower")]
+    assert "payload:lower ended at the edge of its range" in c["note"] and "searched wider" in c["note"]
+    assert c["params"]["payload:lower"] > 1.1 * 5 * 0.04
+
+
 def test_never_worse_than_the_nominal_model(tmp_path):
     """Training recordings from a plant with a 16.5 ms action delay, the held-out recording from
     one without: the delay is found on the training data but predicts the held-out data worse, so

@@ -287,8 +287,10 @@ def _at_bottom(c: Candidate, v: float) -> bool:
 
 def _at_edge(c: Candidate, v: float) -> bool:
     """``v`` (the candidate's first parameter) ended at the edge of its search range that widening
-    moves: the top for timing effects and backlash, the bottom for a saturation."""
-    return ((c.effect in ("motor_lag", "action_delay", "backlash") and v >= 0.98 * c.search[0][1])
+    moves: the top for timing effects, backlash and a payload (5x its body's mass: a free swing
+    fixes no force scale, and the IBM double pendulum's upper payload ended there), the bottom for
+    a saturation."""
+    return ((c.effect in ("motor_lag", "action_delay", "backlash", "mass_offset") and v >= 0.98 * c.search[0][1])
             or (c.effect == "actuator_saturation" and _at_bottom(c, v)))
 
 
