@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from sim2real.sysid import select
-from sim2real.sysid.diagnose import (DiagnoseConfig, _effect_row, _switched_off, _typical_ratio, diagnose, far_masses,
+from sim2real.sysid.diagnose import (DiagnoseConfig, _at_bound, _effect_row, _switched_off, _typical_ratio, diagnose, far_masses,
                                      force_scale, heldout_walk, relative_change)
 from sim2real.sysid.trajectory import choose_window, noise_std
 
@@ -277,6 +277,27 @@ def test_a_force_limit_far_below_its_grid_is_reached_by_the_widened_search(tmp_p
     assert d["selected"][0]["params"]["saturation:iservo"] == pytest.approx(true["saturation:iservo"], rel=0.25)
     (c,) = [c for c in d["rounds"][0]["candidates"] if c["effect"] == "actuator_saturation"]
     assert "searched wider" in c["note"]
+
+
+def test_an_effect_left_at_the_edge_of_its_range_by_the_joint_refit_is_a_bound():
+    """``_at_bound``: the IBM double pendulum's upper payload was 21 g in its own round and 106 g
+    (past its range's top, 5x the 21 g rod) after the joint re-fits, with no word of it. The rule
+    is the widening's (``select.at_edge``): a payload's or a timing effect's top, a saturation's
+    bottom; a friction inside its range says nothing."""
+    from sim2real.sysid.candidates import Candidate
+
+    pay = Candidate("mass_offset", "upper", ("payload:upper", "payload_r:upper"), ((0.02, 0.1),), (0.006, 0.07),
+                    ((0.0, 0.1036), (0.0, 0.6)))
+    units = {"payload:upper": "kg", "payload_r:upper": "m"}
+    note = _at_bound(pay, {"params": {"payload:upper": 0.1064, "payload_r:upper": 0.146}, "units": units})
+    assert "payload:upper of mass_offset@upper ended at 0.1064 kg" in note and "0 to 0.104 kg" in note
+    assert _at_bound(pay, {"params": {"payload:upper": 0.021, "payload_r:upper": 0.146}, "units": units}) is None
+    sat = Candidate("actuator_saturation", "m", ("saturation:m",), ((1.0,),), (0.5,), ((0.4, 2.0),))
+    assert _at_bound(sat, {"params": {"saturation:m": 0.401}, "units": {"saturation:m": "N"}}) is not None
+    assert _at_bound(sat, {"params": {"saturation:m": 1.99}, "units": {"saturation:m": "N"}}) is None
+    fr = Candidate("coulomb_friction", "j", ("coulomb:j", "coulomb_vel:j"), ((0.1, 0.01),), (0.1, 0.1),
+                   ((0.0, 2.0), (0.001, 1.0)))
+    assert _at_bound(fr, {"params": {"coulomb:j": 0.3, "coulomb_vel:j": 0.001}, "units": {"coulomb:j": "N m"}}) is None
 
 
 def test_masses_refitted_far_from_the_model_are_reported():

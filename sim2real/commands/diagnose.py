@@ -33,7 +33,8 @@ def main(argv):
             std = s["std"].get(k)
             print(f"    {k} = {v:.6g}" + (f" +- {std:.2g}" if std is not None and std == std else "")
                   + (f" {s['units'][k]}" if k in s.get("units", {}) else "")
-                  + (" (not identified: notes)" if k in s.get("unidentified", ()) else ""))
+                  + (" (not identified: notes)" if k in s.get("unidentified", ()) else "")
+                  + (" (a bound: notes)" if k == s.get("at_bound") else ""))
     for note in d["notes"]:
         print(f"  note: {note}")
     f = d["fit"]

@@ -361,7 +361,8 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
         rows = []
         for k, v in s["params"].items():
             sd = s["std"].get(k)
-            rows.append([f"`{k}`", f"{v:.6g}", "not identified (notes)" if k in s.get("unidentified", ()) else _fmt(sd),
+            rows.append([f"`{k}`", f"{v:.6g}" + (" (a bound: notes)" if k == s.get("at_bound") else ""),
+                         "not identified (notes)" if k in s.get("unidentified", ()) else _fmt(sd),
                          ci(v, sd),
                          s.get("units", {}).get(k, "s" if k.endswith("seconds") else "")])
         B.append(("table", ["parameter", "value", "std", "95% interval", "unit"], rows))
