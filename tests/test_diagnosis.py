@@ -281,9 +281,9 @@ def test_a_force_limit_far_below_its_grid_is_reached_by_the_widened_search(tmp_p
 
 def test_an_effect_left_at_the_edge_of_its_range_by_the_joint_refit_is_a_bound():
     """``_at_bound``: the IBM double pendulum's upper payload was 21 g in its own round and 106 g
-    (past its range's top, 5x the 21 g rod) after the joint re-fits, with no word of it. The rule
-    is the widening's (``select.at_edge``): a payload's or a timing effect's top, a saturation's
-    bottom; a friction inside its range says nothing."""
+    (past its range's top, 5x the 21 g rod) after the joint re-fits, with no word of it. Any
+    first parameter at its range's top, or at a bottom that is not 0 (a saturation's), is a
+    bound; a magnitude at 0 is the effect's absence, and a value inside its range says nothing."""
     from sim2real.sysid.candidates import Candidate
 
     pay = Candidate("mass_offset", "upper", ("payload:upper", "payload_r:upper"), ((0.02, 0.1),), (0.006, 0.07),
@@ -294,10 +294,14 @@ def test_an_effect_left_at_the_edge_of_its_range_by_the_joint_refit_is_a_bound()
     assert _at_bound(pay, {"params": {"payload:upper": 0.021, "payload_r:upper": 0.146}, "units": units}) is None
     sat = Candidate("actuator_saturation", "m", ("saturation:m",), ((1.0,),), (0.5,), ((0.4, 2.0),))
     assert _at_bound(sat, {"params": {"saturation:m": 0.401}, "units": {"saturation:m": "N"}}) is not None
-    assert _at_bound(sat, {"params": {"saturation:m": 1.99}, "units": {"saturation:m": "N"}}) is None
+    assert _at_bound(sat, {"params": {"saturation:m": 1.5}, "units": {"saturation:m": "N"}}) is None
     fr = Candidate("coulomb_friction", "j", ("coulomb:j", "coulomb_vel:j"), ((0.1, 0.01),), (0.1, 0.1),
                    ((0.0, 2.0), (0.001, 1.0)))
     assert _at_bound(fr, {"params": {"coulomb:j": 0.3, "coulomb_vel:j": 0.001}, "units": {"coulomb:j": "N m"}}) is None
+    assert _at_bound(fr, {"params": {"coulomb:j": 2.0, "coulomb_vel:j": 0.5}, "units": {"coulomb:j": "N m"}}) is not None
+    off = Candidate("sensor_offset", "j", ("sensor_offset:j",), ((0.01,),), (0.01,), ((-0.3, 0.3),))
+    assert _at_bound(off, {"params": {"sensor_offset:j": -0.3}, "units": {"sensor_offset:j": "rad"}}) is not None
+    assert _at_bound(off, {"params": {"sensor_offset:j": 0.0}, "units": {"sensor_offset:j": "rad"}}) is None
 
 
 def test_masses_refitted_far_from_the_model_are_reported():

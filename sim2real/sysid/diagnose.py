@@ -34,7 +34,7 @@ from sim2real.sysid.derivatives import velocity_state
 from sim2real.sysid.export import write_fitted_mjcf
 from sim2real.sysid.fit import Fitter
 from sim2real.sysid.recordings import RecordingError, check_sample_rate, load_all
-from sim2real.sysid.select import FAR_MASS, TIMING, Model, SelectConfig, Selector, at_edge, is_far_mass
+from sim2real.sysid.select import FAR_MASS, TIMING, Model, SelectConfig, Selector, is_far_mass
 from sim2real.sysid.shooting import Shooting
 from sim2real.sysid.system import System
 from sim2real.sysid.trajectory import from_recording, quantisation_noise, signal_scale
@@ -917,17 +917,18 @@ def _effect_row(system, cand, model, dt: float) -> dict:
 
 
 def _at_bound(cand, row: dict) -> str | None:
-    """The words for an effect whose first parameter ends the diagnosis at (or past) the edge of
-    its searched range that a fit widens (``select.at_edge``), else None. The fit of the effect's
-    own round widens its range once and says so in its note; the joint re-fits after it (more
-    effects, masses held, the energy balance's re-fit) can carry it to the edge again, or past it
-    where a re-fit is bounded by the physical limits alone (the IBM double pendulum's upper
+    """The words for an effect whose first parameter ends the diagnosis at (or past) an edge of
+    its searched range, else None: the top, or the bottom where that is not 0 (a magnitude's 0 is
+    the effect's absence). The fit of the effect's own round widens the edges that
+    ``select.at_edge`` names once and says so in its note; the joint re-fits after it (more
+    effects, masses held, the energy balance's re-fit) can carry a value to an edge again, or past
+    it where a re-fit is bounded by the physical limits alone (the IBM double pendulum's upper
     payload: 106 g on a 21 g rod, whose payloads are searched up to 5x its mass)."""
     name = cand.params[0]
     v = row["params"][name]
-    if not at_edge(cand, v):
-        return None
     lo, hi = cand.search[0]
+    if not (v >= hi - 0.02 * abs(hi) or (lo != 0 and v <= lo + 0.02 * abs(lo))):
+        return None
     unit = row["units"][name]
     return (f"{name} of {cand.label} ended at {v:.4g} {unit}, at or past the edge of its searched range "
             f"({lo:.3g} to {hi:.3g} {unit}): a bound, not an estimate")
