@@ -920,7 +920,7 @@ def _at_bound(cand, row: dict) -> str | None:
     """The words for an effect whose first parameter ends the diagnosis at (or past) an edge of
     its searched range, else None: the top, or the bottom where that is not 0 (a magnitude's 0 is
     the effect's absence). The fit of the effect's own round widens the edges that
-    ``select.at_edge`` names once and says so in its note; the joint re-fits after it (more
+    ``select._at_edge`` names once and says so in its note; the joint re-fits after it (more
     effects, masses held, the energy balance's re-fit) can carry a value to an edge again, or past
     it where a re-fit is bounded by the physical limits alone (the IBM double pendulum's upper
     payload: 106 g on a 21 g rod, whose payloads are searched up to 5x its mass)."""

@@ -285,11 +285,10 @@ def _at_bottom(c: Candidate, v: float) -> bool:
     return v <= 1.02 * c.search[0][0]
 
 
-def at_edge(c: Candidate, v: float) -> bool:
+def _at_edge(c: Candidate, v: float) -> bool:
     """``v`` (the candidate's first parameter) ended at the edge of its search range that widening
-    moves: the top for timing effects, backlash and a payload (5x its body's mass: a free swing
-    fixes no force scale, and the IBM double pendulum's upper payload ended there), the bottom for
-    a saturation."""
+    moves: the top for timing effects, backlash and a payload (5x its body's mass, which the load
+    on a light link can pass), the bottom for a saturation."""
     return ((c.effect in ("motor_lag", "action_delay", "backlash", "mass_offset") and v >= 0.98 * c.search[0][1])
             or (c.effect == "actuator_saturation" and _at_bottom(c, v)))
 
@@ -635,7 +634,7 @@ class Selector:
             C = self._scan_width(M, c, C)
         # a fit that ends at the edge of the searched range: widen once and fit again
         v = float(C.z[self.spec.index(c.params[0])])
-        if at_edge(c, v):
+        if _at_edge(c, v):
             wide = c.widen()
             C2 = self.fit(M.effects + [wide], C.z.copy(), C.result.v0)
             if c.effect == "actuator_saturation":  # a limit far below: the fit from the edge stays there
@@ -648,7 +647,7 @@ class Selector:
             if C2.result.phi < C.result.phi:
                 C, trial.candidate = C2, wide
             v2 = float(C.z[self.spec.index(trial.candidate.params[0])])
-            if at_edge(trial.candidate, v2):
+            if _at_edge(trial.candidate, v2):
                 trial.note += f"; still at the edge after widening ({v2:.4g}): the value is a bound, not an estimate"
         trial.model = C
         return trial
