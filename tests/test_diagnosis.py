@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from sim2real.sysid import select
-from sim2real.sysid.diagnose import (DiagnoseConfig, _at_bound, _effect_row, _switched_off, _typical_ratio, diagnose, far_masses,
-                                     force_scale, heldout_walk, relative_change)
+from sim2real.sysid.diagnose import (DiagnoseConfig, _at_bound, _effect_row, _switched_off, _typical_ratio, diagnose,
+                                     far_masses, force_scale, heldout_walk, relative_change)
 from sim2real.sysid.trajectory import choose_window, noise_std
 
 # every test here runs a diagnosis: thousands of simulated segments (see conftest.py)
