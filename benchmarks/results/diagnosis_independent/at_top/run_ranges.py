@@ -17,26 +17,18 @@ import run_device  # noqa: E402
 from sim2real.sysid import select as S  # noqa: E402
 
 LOG = os.path.join(sys.argv[1], "ranges.jsonl")
-CURRENT = {"label": "?"}
-_init, _one = S.Selector.__init__, run_device.one
+_init = S.Selector.__init__
 
 
 def init(self, fitter, nominal, candidates, cfg, *a, **k):
     with open(LOG, "a") as f:
-        f.write(json.dumps({"case": CURRENT["label"],
+        f.write(json.dumps({"case": run_device.CURRENT["label"],
                             "ranges": {c.label: [float(c.search[0][0]), float(c.search[0][1])] for c in candidates}})
                 + "\n")
     _init(self, fitter, nominal, candidates, cfg, *a, **k)
 
 
-def one(case, name):
-    CURRENT["label"] = case.label
-    return _one(case, name)
-
-
 S.Selector.__init__ = init
-run_device.one = one
 
 if __name__ == "__main__":
-    os.makedirs(sys.argv[1], exist_ok=True)
-    run_device.main(sys.argv[1], float(sys.argv[2]), sys.argv[3:] or list(run_device.LISTS))
+    run_device.cli()

@@ -27,7 +27,11 @@ ONLY = set(open(os.environ["CASES"]).read().split()) if os.environ.get("CASES") 
 LISTS = ("combos", "pairs", "tuning", "extra", "focus", "servo", "beside", "timing", "pd")
 
 
+CURRENT = {"label": "?"}  # the case a worker is on (for hooks that log what it computes)
+
+
 def one(case, name: str) -> str:
+    CURRENT["label"] = case.label
     work = f"/tmp/w_{name}"
     row = di.run_case(case, work, SETTINGS[name])
     folder = os.path.join(work, case.label)
@@ -85,5 +89,10 @@ def main(out: str, seconds: float, lists: list[str]):
         os._exit(0)
 
 
-if __name__ == "__main__":
+def cli() -> None:
+    """``python SCRIPT OUT SECONDS [LIST ...]``"""
     main(sys.argv[1], float(sys.argv[2]), sys.argv[3:] or list(LISTS))
+
+
+if __name__ == "__main__":
+    cli()

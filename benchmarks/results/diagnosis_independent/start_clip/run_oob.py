@@ -13,8 +13,7 @@ import run_device  # noqa: E402
 from sim2real.sysid import fit as F  # noqa: E402
 
 LOG = os.path.join(sys.argv[1], "oob.txt")
-CURRENT = {"label": "?"}
-_fit, _one = F.Fitter.fit, run_device.one
+_fit = F.Fitter.fit
 
 
 def fit(self, z0, v0, names, tiles, iters=6, tol=1e-3, bounds=None, at_noise=False):
@@ -27,18 +26,11 @@ def fit(self, z0, v0, names, tiles, iters=6, tol=1e-3, bounds=None, at_noise=Fal
     with open(LOG, "a") as f:
         for k, n in enumerate(names):
             if not lo[k] - 1e-9 * max(1.0, abs(hi[k])) <= z[k] <= hi[k] + 1e-9 * max(1.0, abs(hi[k])):
-                f.write(f"{CURRENT['label']} {n} {z[k]:.6g} {lo[k]:.6g} {hi[k]:.6g}\n")
+                f.write(f"{run_device.CURRENT['label']} {n} {z[k]:.6g} {lo[k]:.6g} {hi[k]:.6g}\n")
     return _fit(self, z0, v0, names, tiles, iters, tol, bounds, at_noise)
 
 
-def one(case, name):
-    CURRENT["label"] = case.label
-    return _one(case, name)
-
-
 F.Fitter.fit = fit
-run_device.one = one
 
 if __name__ == "__main__":
-    os.makedirs(sys.argv[1], exist_ok=True)
-    run_device.main(sys.argv[1], float(sys.argv[2]), sys.argv[3:] or list(run_device.LISTS))
+    run_device.cli()
