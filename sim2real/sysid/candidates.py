@@ -48,6 +48,7 @@ EFFECTS = ("none",) + tuple(k.effect for g in _GROUPS for k in kinds.offering(g,
 ALL_EFFECTS = ("none",) + tuple(k.effect for g in _GROUPS for k in kinds.offering(g))
 """Everything it can search (``effects=[...]`` may add the rest, e.g. ``quadratic_drag``)."""
 SAT_WIDEN = 64  # a saturation that ends at the bottom of its range is searched down to this much lower (``Candidate.widen``)
+EDGE = 0.02  # a fitted value within this share of its range's edge ended there
 
 
 @dataclasses.dataclass(frozen=True)
@@ -80,8 +81,18 @@ class Candidate:
         delay, payload, ...; a saturation at the top of its range): a fit that ends there gained
         nothing from the effect, only from the other parameters it re-fitted."""
         if self.effect == "actuator_saturation":
-            return v >= 0.98 * self.search[0][1]
+            return self.at_top(v)
         return abs(v) <= 1e-3 * self.scales[0]
+
+    def at_top(self, v: float) -> bool:
+        """The first parameter ``v`` ended at the top of its search range (within ``EDGE``) or past it."""
+        hi = self.search[0][1]
+        return v >= ((1 - EDGE) * hi if hi >= 0 else (1 + EDGE) * hi)
+
+    def at_bottom(self, v: float) -> bool:
+        """The first parameter ``v`` ended at the bottom of its search range (within ``EDGE``) or below it."""
+        lo = self.search[0][0]
+        return v <= ((1 + EDGE) * lo if lo >= 0 else (1 - EDGE) * lo)
 
     def widen(self) -> "Candidate":
         """The same candidate with its (first parameter's) range and grid pushed past the edge."""

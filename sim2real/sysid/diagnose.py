@@ -927,7 +927,7 @@ def _at_bound(cand, row: dict) -> str | None:
     name = cand.params[0]
     v = row["params"][name]
     lo, hi = cand.search[0]
-    if not (v >= hi - 0.02 * abs(hi) or (lo != 0 and v <= lo + 0.02 * abs(lo))):
+    if not (cand.at_top(v) or (lo != 0 and cand.at_bottom(v))):
         return None
     unit = row["units"][name]
     return (f"{name} of {cand.label} ended at {v:.4g} {unit}, at or past the edge of its searched range "

@@ -280,17 +280,12 @@ def band_starts(points: list, n: int) -> list:
     return sorted(per_width.values(), key=lambda x: x[0])[:n]
 
 
-def _at_bottom(c: Candidate, v: float) -> bool:
-    """``v`` (the candidate's first parameter) ended at the bottom of its search range."""
-    return v <= 1.02 * c.search[0][0]
-
-
 def _at_edge(c: Candidate, v: float) -> bool:
     """``v`` (the candidate's first parameter) ended at the edge of its search range that widening
     moves: the top for timing effects, backlash and a payload (5x its body's mass, which the load
     on a light link can pass), the bottom for a saturation."""
-    return ((c.effect in ("motor_lag", "action_delay", "backlash", "mass_offset") and v >= 0.98 * c.search[0][1])
-            or (c.effect == "actuator_saturation" and _at_bottom(c, v)))
+    return ((c.effect in ("motor_lag", "action_delay", "backlash", "mass_offset") and c.at_top(v))
+            or (c.effect == "actuator_saturation" and c.at_bottom(v)))
 
 
 class Selector:
@@ -680,7 +675,7 @@ class Selector:
                 t.note = (t.note + "; " if t.note else "") + note
             c = t.candidate
             if (t.passed and c.effect == "backlash" and self.cfg.band_shown
-                    and _at_bottom(c, float(t.model.z[self.spec.index(c.params[0])]))):
+                    and c.at_bottom(float(t.model.z[self.spec.index(c.params[0])]))):
                 self._band_shown(t)
 
     def _band_shown(self, trial: Trial) -> None:
