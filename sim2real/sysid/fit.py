@@ -162,6 +162,16 @@ class Fitter:
         keep = w > max(sigma2, 1e-12) * 1.0
         return w, V, keep
 
+    def range_of(self, names, bounds=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(indices, lo, hi)`` of parameters ``names``: their physical bounds, narrowed to
+        ``bounds`` (``{name: (lo, hi)}``) where given; what ``fit`` keeps every step inside."""
+        idx = self.spec.indices(names) if names else np.zeros(0, int)
+        lo, hi = self.spec.low[idx].astype(float), self.spec.high[idx].astype(float)
+        for k, n in enumerate(names):
+            if bounds and n in bounds:
+                lo[k], hi[k] = max(lo[k], bounds[n][0]), min(hi[k], bounds[n][1])
+        return idx, lo, hi
+
     def fit(self, z0, v0, names, tiles, iters: int = 6, tol: float = 1e-3, bounds=None, at_noise: bool = False) -> Result:
         """Gauss-Newton / Levenberg-Marquardt from ``z0``; ``bounds``: ``{name: (lo, hi)}``
         narrower than the physical ones (a search range).
@@ -176,12 +186,8 @@ class Fitter:
         against 13 at the truth; ``tuning.md`` step 77)."""
         z = np.asarray(z0, np.float32).copy()
         v0 = np.asarray(v0, float).copy()
-        idx = self.spec.indices(names) if names else np.zeros(0, int)
+        idx, lo, hi = self.range_of(names, bounds)
         scale = np.array([self.scales[n] for n in names])
-        lo, hi = self.spec.low[idx].astype(float), self.spec.high[idx].astype(float)
-        for k, n in enumerate(names):
-            if bounds and n in bounds:
-                lo[k], hi[k] = max(lo[k], bounds[n][0]), min(hi[k], bounds[n][1])
         # a start outside the range is brought inside first: every step is clipped into it, so a
         # fit that started outside had every step rejected and stayed there (the IBM double
         # pendulum's payloads, scaled 25x with the masses by ``Selector._at_model_masses``, sat

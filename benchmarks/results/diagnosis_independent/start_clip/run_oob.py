@@ -17,11 +17,7 @@ _fit = F.Fitter.fit
 
 
 def fit(self, z0, v0, names, tiles, iters=6, tol=1e-3, bounds=None, at_noise=False):
-    idx = self.spec.indices(names) if names else np.zeros(0, int)
-    lo, hi = self.spec.low[idx].astype(float), self.spec.high[idx].astype(float)
-    for k, n in enumerate(names):
-        if bounds and n in bounds:
-            lo[k], hi[k] = max(lo[k], bounds[n][0]), min(hi[k], bounds[n][1])
+    idx, lo, hi = self.range_of(names, bounds)
     z = np.asarray(z0, float)[idx]
     with open(LOG, "a") as f:
         for k, n in enumerate(names):
