@@ -226,6 +226,28 @@ def test_servo_backlash_leaves_a_dead_band():
     assert abs(with_band) > 0.9e-3      # the target sits inside the band: no motion
 
 
+def test_a_stage_left_out_while_off_gives_what_it_gives_off():
+    """``Effects.actuate(skip=...)`` runs ``Kind.command_off`` in place of a stage that is off: the
+    command it passes on is the stage's own at 0 (the backlash's limited to the command range),
+    whatever the stage's memory holds (here filled with a band, a lag and a delay on)."""
+    env = env_for("pendulum")
+    fx, n = env.effects, env.config.frame_skip
+    assert "backlash" in fx.skippable
+    z_on = jnp.asarray(env.z_of(**{"backlash:motor": 0.05, "motor_lag:motor": 0.03, "action_delay": 1.5}))
+    z_off = jnp.asarray(env.default_z())
+    qpos, qvel = jnp.asarray([0.3]), jnp.asarray([-1.0])
+    es = fx.init_state()
+    for u in (0.7, -3.0, 2.5):   # the last beyond the command range
+        es = fx.push(es, jnp.asarray([u * env.ctrl_high[0]], jnp.float32))
+        for j in range(n):
+            _, es = fx.actuate(z_on, es, j, n, qpos, env.dt / n, qvel)
+    assert float(jnp.abs(es["backlash"][0]).max()) > 0            # the memory is not the rest state
+    for j in range(n):
+        full, _ = fx.actuate(z_off, es, j, n, qpos, env.dt / n, qvel)
+        skipped, _ = fx.actuate(z_off, es, j, n, qpos, env.dt / n, qvel, skip=tuple(fx.stage_rows))
+        np.testing.assert_array_equal(np.asarray(skipped), np.asarray(full))
+
+
 def test_a_new_command_path_stage_is_one_plug_in(monkeypatch):
     """A kind with a ``command`` hook joins the command path at its ``command_order`` with nothing
     else changed: declared on every actuator, neutral at its default, acting after the delay line."""

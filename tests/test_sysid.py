@@ -273,6 +273,34 @@ def test_segments_start_the_command_path_from_the_recording(tmp_path):
     assert np.sqrt(np.mean(e_pass1 ** 2)) < 0.5 * np.sqrt(np.mean(e_restart ** 2))
 
 
+def test_a_batch_without_a_band_is_replayed_without_the_band(tmp_path, monkeypatch):
+    """Where no physics of a call has a backlash, the command path is replayed without the band's
+    sums (``Effects.skippable``): the predictions are those of the full replay, and of a batch with
+    a band beside them the band's lane is the band's."""
+    from sim2real.sysid.shooting import Shooting
+    from sim2real.sysid.system import System
+    from sim2real.sysid.trajectory import from_recording
+
+    case = Case("pendulum", "motor_lag", "motor", (("motor_lag:motor", 0.1),), noise=0.0, seed=3)
+    path = str(tmp_path / "lag.csv")
+    record(case, path)
+    rec = load(path, _model())
+    system = System(PENDULUM, dt=rec.dt)
+    assert system.effects.skippable == ("backlash",)
+    z_lag = system.spec.vector({"motor_lag:motor": 0.1})
+    z_band = system.spec.vector({"backlash:motor": 0.05})
+    sh = Shooting(system, [from_recording(rec, system)], 20, val_fraction=0.3)
+    tiles = sh.tiles.of("fit")
+    v0 = np.repeat(sh.v0[None], 2, 0)
+    skipped = sh.predict(np.stack([z_lag, z_lag]), v0, tiles)["qpos"]
+    mixed = sh.predict(np.stack([z_lag, z_band]), v0, tiles)["qpos"]
+    monkeypatch.setattr(system.effects, "skippable", ())
+    full = Shooting(system, [from_recording(rec, system)], 20, val_fraction=0.3)
+    np.testing.assert_allclose(skipped[0], full.predict(z_lag[None], v0[:1], tiles)["qpos"][0], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(mixed, full.predict(np.stack([z_lag, z_band]), v0, tiles)["qpos"], rtol=0, atol=1e-6)
+    assert np.abs(mixed[1] - mixed[0]).max() > 1e-3     # (the band's lane is not the lag's)
+
+
 def test_a_fit_started_outside_its_range_ends_inside(tmp_path):
     """A start above a parameter's search range (``bounds``) is brought inside before the first
     step: every step is clipped into the range, so a fit left at such a start rejected them all

@@ -66,8 +66,11 @@ class Effects:
         # the command path's stages, in their order: (plug-in, its name in the state, static data)
         stages = sorted((k for k in kinds.all_kinds() if k.command_order is not None), key=lambda k: k.command_order)
         self._command = [(k, k.owns[0], d) for k in stages if (d := k.command_setup(m, spec, cfg)) is not None]
-        # rows of z that switch a stage on (its memory matters only then: sysid.shooting)
-        self.command_rows = np.array([r for k, _, d in self._command for r in k.command_rows(d)], np.int32)
+        # rows of z that switch a stage on (its memory matters only then: sysid.shooting), all and per stage
+        self.stage_rows = {name: np.array(k.command_rows(d), np.int32) for k, name, d in self._command}
+        self.command_rows = np.array([r for rows in self.stage_rows.values() for r in rows], np.int32)
+        # stages worth replaying without when they are off (``Kind.skip_when_off``)
+        self.skippable = tuple(name for k, name, _ in self._command if k.skip_when_off and len(self.stage_rows[name]))
         # velocity-dependent forces as damping: (plug-in, its dofs, its static data) per kind
         self._damping = [(k, *ds) for k in kinds.all_kinds() if (ds := k.damping_setup(m, spec, cfg)) is not None]
         self.damping_dofs = (np.concatenate([d for _, d, _ in self._damping]).astype(np.int32) if self._damping
@@ -97,7 +100,7 @@ class Effects:
         out.update({name: k.push(d, es[name], ctrl) for k, name, d in self._command})
         return out
 
-    def actuate(self, z, es: EffectState, j, n: int, qpos, h: float, qvel=None, act=None):
+    def actuate(self, z, es: EffectState, j, n: int, qpos, h: float, qvel=None, act=None, skip=()):
         """The command path for physics sub-step ``j`` of ``n``: each stage in turn (delay -> motor
         lag -> backlash).
 
@@ -109,6 +112,9 @@ class Effects:
             backlash stage moves its dead band with the joint).
           h: physics sub-step in seconds.
           act: ``[na]`` current activations (the backlash's integrating servo starts from them).
+          skip: names of stages known to be off (every row of ``stage_rows`` at 0; static):
+            ``Kind.command_off`` runs in their place (``sysid.shooting``'s replay of the command
+            path, where a backlash's sums are nine tenths of the time on a 3-link arm).
         Returns:
           ``(ctrl_applied [nu], new effect state)``; the activations for the sub-step are
           ``activation(new effect state, act)``.
@@ -117,7 +123,10 @@ class Effects:
         for k, name, d in self._command:
             # (the activations only to a stage that sets them: a plug-in written before it keeps working)
             kw = {"act": act} if k.sets_act(d) else {}
-            u, out[name] = k.command(d, z, es[name], u, j, n, qpos, h, qvel, **kw)
+            if name in skip:
+                u, out[name] = k.command_off(d, es[name], u)
+            else:
+                u, out[name] = k.command(d, z, es[name], u, j, n, qpos, h, qvel, **kw)
         return u, out
 
     def activation(self, es: EffectState, act):

@@ -246,8 +246,9 @@ class Shooting:
             out = out.at[adr].set(x)
         return out
 
-    def _command_states(self, z, data):
-        """Effect state and activations at every segment start ``([S] pytree, [S, na])``."""
+    def _command_states(self, z, data, skip=()):
+        """Effect state and activations at every segment start ``([S] pytree, [S, na])``; ``skip``:
+        stages off for every physics of the batch (``Effects.actuate``)."""
         sys, n, H = self.sys, self.n, self.H
         fx = sys.effects
         h = sys.h
@@ -276,7 +277,7 @@ class Shooting:
 
                 def sub(c2, j):
                     es, act = c2
-                    u, es = fx.actuate(z, es, j, n, qt, h, vt, act)
+                    u, es = fx.actuate(z, es, j, n, qt, h, vt, act, skip=skip)
                     return (es, self._act_step(fx.activation(es, act), u, h)), None
 
                 return jax.lax.scan(sub, (es, act), jnp.arange(n))[0], None
@@ -326,8 +327,17 @@ class Shooting:
         if sys.mj.na:
             needed = jnp.ones((), bool)
 
+        # a costly stage off for every physics of the batch (a backlash) is left out of the replay:
+        # its state stays as it started, which no prediction reads while the stage is off. (One
+        # branch for the batch, not one per step: a branch per sub-step cost as much as the sums.)
+        skip = fx.skippable
+        skip_off = jnp.all(jnp.concatenate([zs[:, fx.stage_rows[s]] <= 0 for s in skip], 1)) if skip else None
+
         def run(_):
-            return jax.vmap(lambda z: self._command_states(z, data))(zs)
+            full = lambda: jax.vmap(lambda z: self._command_states(z, data))(zs)  # noqa: E731
+            if not skip:
+                return full()
+            return jax.lax.cond(skip_off, lambda: jax.vmap(lambda z: self._command_states(z, data, skip))(zs), full)
 
         def rest(_):  # no delay, lag or backlash anywhere: the state is the command itself (no memory)
             es = jax.vmap(lambda s: fx.steady_state(data["ctrl"][data["start"][s]]))(jnp.arange(self.S))

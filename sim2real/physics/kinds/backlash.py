@@ -206,6 +206,13 @@ class Backlash(Kind):
     def command_rows(self, data):
         return [int(r) for r in data["rows"] if r >= 0]
 
+    skip_when_off = True
+
+    def command_off(self, data, state, u):
+        # with every band at 0 ``command`` passes the command limited to its range, and nothing
+        # it keeps (the motor side, an integrating servo's setpoint) reaches the output
+        return jnp.clip(u, data["ctrl_lo"], data["ctrl_hi"]), state
+
     def sets_act(self, data) -> bool:
         return bool(data["integ"].any())
 

@@ -131,6 +131,16 @@ class Kind:
         """Rows of ``z`` whose value > 0 switches this stage on (its memory then matters)."""
         return []
 
+    # a stage whose sums cost a replay of the command path much more than the others' (the
+    # backlash's): ``sysid.shooting`` replays a batch in which it is off everywhere without it
+    skip_when_off: bool = False
+
+    def command_off(self, data, state, u):
+        """``(u [nu], state)``: what ``command`` gives with every row of ``command_rows`` at 0, its
+        memory left as it is (unused while the stage is off). Pass-through by default; a stage
+        that also limits the command when off (the backlash's motor range) says so here."""
+        return u, state
+
     def rebase(self, data, state, dv):
         """Its memory when the joint velocities it was run with change by ``dv [nv]``: a stage
         whose state moves with its joint (the backlash's motor side) moves with it; the rest keep
