@@ -71,6 +71,7 @@ class Backlash(Kind):
     effect = "backlash"
     candidate_order = 64
     command_order = 30
+    skip_when_off = True   # its sums are nine tenths of a replay of the command path
 
     def declared(self, m, index, kind, entry):
         # on a tendon (no joint of its own) the band is not defined: only 0 is allowed
@@ -205,8 +206,6 @@ class Backlash(Kind):
 
     def command_rows(self, data):
         return [int(r) for r in data["rows"] if r >= 0]
-
-    skip_when_off = True
 
     def command_off(self, data, state, u):
         # with every band at 0 ``command`` passes the command limited to its range, and nothing

@@ -19,7 +19,9 @@ hook                who calls it
                     (delay line 10 -> motor lag 20 -> backlash 30), with its own memory
                     (``command_state``; ``push`` once per control step; ``rebase`` where the
                     joint velocities it ran with are corrected: ``sysid.shooting``;
-                    ``activation`` where it sets an actuator's activation: ``Effects.activation``)
+                    ``activation`` where it sets an actuator's activation: ``Effects.activation``;
+                    ``command_off``, what it passes on while off, where a replay leaves it out:
+                    ``skip_when_off``)
 ``sense``           ``Effects.sense`` / ``measure`` / ``unsense``: how a measured position is made
 ``export``          ``sysid.export``: the fitted value written into the user's ``MjSpec``
 ``candidates``      ``sysid.candidates.library``: the hypotheses the diagnosis searches
