@@ -333,11 +333,11 @@ class Shooting:
         skip = fx.skippable
         skip_off = jnp.all(jnp.concatenate([zs[:, fx.stage_rows[s]] <= 0 for s in skip], 1)) if skip else None
 
+        def replay(left_out):
+            return jax.vmap(lambda z: self._command_states(z, data, left_out))(zs)
+
         def run(_):
-            full = lambda: jax.vmap(lambda z: self._command_states(z, data))(zs)  # noqa: E731
-            if not skip:
-                return full()
-            return jax.lax.cond(skip_off, lambda: jax.vmap(lambda z: self._command_states(z, data, skip))(zs), full)
+            return jax.lax.cond(skip_off, lambda: replay(skip), lambda: replay(())) if skip else replay(())
 
         def rest(_):  # no delay, lag or backlash anywhere: the state is the command itself (no memory)
             es = jax.vmap(lambda s: fx.steady_state(data["ctrl"][data["start"][s]]))(jnp.arange(self.S))
