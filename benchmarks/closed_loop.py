@@ -141,7 +141,9 @@ class Settings:
     ``;`` (e.g. ``ppo.num_envs=1024;ppo.num_minibatches=16``); diagnose_set: the loop's diagnosis
     settings, the same way (e.g. ``effects=[...,motor_lag_all]``: a lag shared by every motor);
     ramp: the fine-tuned methods (``oracle_ft``, the loop with ``loop_warm_start``) move from the
-    env's own physics to theirs over this fraction of their training (``UDRConfig.ramp``)."""
+    env's own physics to theirs over this fraction of their training (``UDRConfig.ramp``);
+    warm_std: ... and restart from this action standard deviation (``UDRConfig.warm_std``; 0: the
+    nominal policy's own)."""
     env: str = "pendulum"
     seeds: int = 3
     episodes: int = 64
@@ -159,6 +161,7 @@ class Settings:
     config_set: str = ""
     diagnose_set: str = ""
     ramp: float = 0.0
+    warm_std: float = 0.0
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
 METHODS = ("nominal", "oracle", "udr_wide", "udr_blind", "lsdr", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2",
@@ -219,7 +222,8 @@ def main(args: Settings):
     if "oracle_ft" in methods:
         t = time.time()
         r = _train(base, "oracle_ft", work, num_seeds=S, dr=DRConfig(fixed=dict(setup["truth"])),
-                   algo_options={**base.algo_options, "warm_start": nominal, "ramp": args.ramp})
+                   algo_options={**base.algo_options, "warm_start": nominal, "ramp": args.ramp,
+                                                 "warm_std": args.warm_std})
         seconds["oracle_ft"] = time.time() - t
         add("oracle_ft", _scores(r, plant, args.episodes, S))
     if "udr_wide" in methods:
@@ -287,8 +291,8 @@ def main(args: Settings):
         diag_opts = [a.strip() for a in args.diagnose_set.split(";") if a.strip()]
         for s in per_seed:
             b = dataclasses.replace(base, seed=s)
-            if args.loop_warm_start and args.ramp:
-                b = dataclasses.replace(b, algo_options={**b.algo_options, "ramp": args.ramp})
+            if args.loop_warm_start and (args.ramp or args.warm_std):
+                b = dataclasses.replace(b, algo_options={**b.algo_options, "ramp": args.ramp, "warm_std": args.warm_std})
             try:
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
                                      run_seed=s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,

@@ -254,6 +254,12 @@ def test_udr_warm_start_takes_one_seed_of_a_run_for_every_seed(tmp_path):
         for s in range(3):
             np.testing.assert_array_equal(np.asarray(x)[s], np.asarray(y)[1])
     assert (np.asarray(st.update_step) == 0).all()
+    wide = build_algo(tiny(tmp_path, "name=b", "num_seeds=3", f"algo_options.warm_start={tmp_path / 'a'}",
+                           "algo_options.warm_start_seed=1", "algo_options.warm_std=0.5"), make("pendulum"))
+    st2 = wide.init_seeds(jax.random.split(jax.random.PRNGKey(0), 3))
+    np.testing.assert_allclose(np.asarray(st2.params["params"]["log_std"]), np.log(0.5), rtol=1e-6)
+    np.testing.assert_array_equal(np.asarray(st2.params["params"]["actor"]["Dense_0"]["kernel"]),
+                                  np.asarray(st.params["params"]["actor"]["Dense_0"]["kernel"]))
     with pytest.raises(ValueError, match="holds 2 seeds"):  # all of a 2-seed run cannot start 3
         build_algo(tiny(tmp_path, "name=c", "num_seeds=3", f"algo_options.warm_start={tmp_path / 'a'}"),
                    make("pendulum"))
