@@ -140,10 +140,8 @@ class Settings:
     counted to the fall; config_set: extra training settings for every method, ``key=value`` separated by
     ``;`` (e.g. ``ppo.num_envs=1024;ppo.num_minibatches=16``); diagnose_set: the loop's diagnosis
     settings, the same way (e.g. ``effects=[...,motor_lag_all]``: a lag shared by every motor);
-    ramp: the fine-tuned methods (``oracle_ft``, the loop with ``loop_warm_start``) move from the
-    env's own physics to theirs over this fraction of their training (``UDRConfig.ramp``);
-    warm_std: ... and restart from this action standard deviation (``UDRConfig.warm_std``; 0: the
-    nominal policy's own)."""
+    warm_std: the fine-tuned methods (``oracle_ft``, the loop with ``loop_warm_start``) restart from
+    this action standard deviation (``UDRConfig.warm_std``; 0: the nominal policy's own)."""
     env: str = "pendulum"
     seeds: int = 3
     episodes: int = 64
@@ -160,7 +158,6 @@ class Settings:
     record_until_end: bool = False
     config_set: str = ""
     diagnose_set: str = ""
-    ramp: float = 0.0
     warm_std: float = 0.0
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
@@ -222,8 +219,7 @@ def main(args: Settings):
     if "oracle_ft" in methods:
         t = time.time()
         r = _train(base, "oracle_ft", work, num_seeds=S, dr=DRConfig(fixed=dict(setup["truth"])),
-                   algo_options={**base.algo_options, "warm_start": nominal, "ramp": args.ramp,
-                                                 "warm_std": args.warm_std})
+                   algo_options={**base.algo_options, "warm_start": nominal, "warm_std": args.warm_std})
         seconds["oracle_ft"] = time.time() - t
         add("oracle_ft", _scores(r, plant, args.episodes, S))
     if "udr_wide" in methods:
@@ -291,8 +287,8 @@ def main(args: Settings):
         diag_opts = [a.strip() for a in args.diagnose_set.split(";") if a.strip()]
         for s in per_seed:
             b = dataclasses.replace(base, seed=s)
-            if args.loop_warm_start and (args.ramp or args.warm_std):
-                b = dataclasses.replace(b, algo_options={**b.algo_options, "ramp": args.ramp, "warm_std": args.warm_std})
+            if args.loop_warm_start and args.warm_std:
+                b = dataclasses.replace(b, algo_options={**b.algo_options, "warm_std": args.warm_std})
             try:
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
                                      run_seed=s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,

@@ -9,7 +9,7 @@ def _udr(env, cfg):
     from sim2real.algos.udr import UDR, UDRConfig
 
     opts = config_lib.from_dict(UDRConfig, cfg.algo_options, "algo_options.")
-    algo = UDR(env, cfg.ppo, cfg.dr, cfg.num_updates, ramp=opts.ramp, warm_std=opts.warm_std)
+    algo = UDR(env, cfg.ppo, cfg.dr, cfg.num_updates, warm_std=opts.warm_std)
     algo.warm_start_from, algo.warm_start_seed = opts.warm_start, opts.warm_start_seed
     return algo
 

@@ -22,13 +22,6 @@ class UDRConfig:
         its parameters and observation statistics, with a fresh optimiser and learning-rate
         schedule (fine-tuning a trained policy on new physics; ``sim2real/tools/loop.py``).
       warm_start_seed: which of that run's seeds starts them (-1: one per seed, or its only one).
-      ramp: fraction of the run's updates over which the physics moves from the env's own values
-        to the run's: at update ``t`` a draw ``z`` is used as ``z0 + min(1, t / (ramp * updates))
-        * (z - z0)`` (``z0``: the env's defaults). 0: the run's physics from the first update.
-        Meant for a warm start from a policy trained on the env's own physics: a fine-tuned
-        cart-pole swing-up that meets 3 N of rail stiction at once loses most of what it knew
-        (the closed-loop benchmark's ``oracle_ft``, README), and one that meets it gradually
-        may keep it.
       warm_std: the action standard deviation (of the network's output, before clipping) the
         warm start's policy restarts from; 0: its own. A policy trained to the end of its
         schedule has narrowed its exploration (the cart-pole swing-up's to about 0.04).
@@ -36,12 +29,9 @@ class UDRConfig:
 
     warm_start: str = ""
     warm_start_seed: int = -1
-    ramp: float = 0.0
     warm_std: float = 0.0
 
     def __post_init__(self):
-        if not 0.0 <= self.ramp <= 1.0:
-            raise ValueError(f"algo_options.ramp={self.ramp}: a fraction of the run in [0, 1]")
         if not 0.0 <= self.warm_std < 1e3:
             raise ValueError(f"algo_options.warm_std={self.warm_std}: an action standard deviation >= 0 (0: the warm start's own)")
 
@@ -52,29 +42,20 @@ class UDR(OuterLoop):
     State: :class:`PPOState`. ``update(state) -> (state, metrics)`` is one PPO iteration.
     """
 
-    def __init__(self, env: Env, ppo_cfg: PPOConfig, dr: DRConfig, num_updates: int, ramp: float = 0.0,
-                 warm_std: float = 0.0):
+    def __init__(self, env: Env, ppo_cfg: PPOConfig, dr: DRConfig, num_updates: int, warm_std: float = 0.0):
         self.env = env
         self.warm_std = warm_std
-        self.ramp_updates = ramp * max(1, int(num_updates))   # (UDRConfig.ramp)
-        self.z0 = jnp.asarray(env.z_of(), jnp.float32)
         self.space = DRSpace(env, dr)
         ctx = Context.make(env, self.space.names, self.space.low, self.space.high) if len(self.space) else None
         self.ppo = PPO(env, ppo_cfg, num_updates, ctx)
         self.dist = uniform.make(self.space.low, self.space.high) if len(self.space) else None
 
-    def sampler(self, dist=None, at=None):
-        """Physics draws ``key -> z [P]``; ``at``: the update index (traced), which ``ramp`` reads."""
+    def sampler(self, dist=None):
         base = jnp.asarray(self.space.base)
         if self.dist is None:
-            draw = lambda key: base  # noqa: E731
-        else:
-            d = self.dist if dist is None else dist
-            draw = lambda key: self.space.expand(uniform.sample(key, d))  # noqa: E731
-        if at is None or self.ramp_updates <= 0:
-            return draw
-        s = jnp.clip(at / self.ramp_updates, 0.0, 1.0).astype(self.z0.dtype)
-        return lambda key: self.z0 + s * (draw(key) - self.z0)
+            return lambda key: base
+        d = self.dist if dist is None else dist
+        return lambda key: self.space.expand(uniform.sample(key, d))
 
     def init(self, key) -> PPOState:
         return self.ppo.init(key, self.sampler())
@@ -90,7 +71,7 @@ class UDR(OuterLoop):
         return st.replace(params={**p, "params": {**p["params"], "log_std": log_std}})
 
     def update(self, st: PPOState):
-        return self.ppo.update(st, self.sampler(at=st.update_step))
+        return self.ppo.update(st, self.sampler())
 
     def policy(self, st: PPOState):
         return st.params, st.obs_stats
