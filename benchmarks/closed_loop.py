@@ -24,7 +24,9 @@ effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim
   or masses re-fitted more than 10x off -- retrain on the ``wide`` box instead: ``LoopConfig.fallback``);
 - ``diag_dr_2``: the loop twice (record again with the new policy, diagnose again, retrain).
 - ``oracle_ft``: the oracle's physics, fine-tuned from each seed's nominal policy (the fair upper
-  bound for the loop with ``loop_warm_start=true``: the same steps, the same start).
+  bound for the loop with ``loop_warm_start=true``: the same steps, the same start);
+- ``udr_blind_ft``: the ``blind`` box, fine-tuned from each seed's nominal policy (wide DR with the
+  loop's history: its fair baseline with ``loop_warm_start=true``).
 
 With ``loop_warm_start=true`` every retraining of the loop starts from the policy that made its
 recordings (``sim2real/tools/loop.py``), so the loop's policies have had the nominal training's
@@ -162,7 +164,7 @@ class Settings:
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
 METHODS = ("nominal", "oracle", "udr_wide", "udr_blind", "lsdr", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2",
-           "oracle_ft")
+           "oracle_ft", "udr_blind_ft")
 
 
 def main(args: Settings):
@@ -200,11 +202,11 @@ def main(args: Settings):
         write(args, setup, rows, diagnoses, seconds, quiet=True)  # each method's scores kept as they come
         print(f"{method:>12s}: " + ", ".join(f"{r:.1f}" for r in rets) + f"  (mean {np.mean(rets):.1f})", flush=True)
 
-    blind = {"udr_blind", "simopt_blind"} & set(methods)
+    blind = {"udr_blind", "simopt_blind", "udr_blind_ft"} & set(methods)
     if blind and "blind" not in setup:
         raise SystemExit(f"methods: {', '.join(sorted(blind))} need a blind box; env={args.env} has none "
                          f"(pendulum, cartpole)")
-    needs_nominal = {"nominal", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2", "oracle_ft"} & set(methods)
+    needs_nominal = {"nominal", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2", "oracle_ft", "udr_blind_ft"} & set(methods)
     if needs_nominal:
         t = time.time()
         nominal = _train(base, "nominal", work, num_seeds=S)
@@ -232,12 +234,18 @@ def main(args: Settings):
         r = _train(base, "udr_blind", work, num_seeds=S, dr=_wide(setup, "blind"))
         seconds["udr_blind"] = time.time() - t
         add("udr_blind", _scores(r, plant, args.episodes, S))
+    if "udr_blind_ft" in methods:
+        t = time.time()
+        r = _train(base, "udr_blind_ft", work, num_seeds=S, dr=_wide(setup, "blind"),
+                   algo_options={**base.algo_options, "warm_start": nominal, "warm_std": args.warm_std})
+        seconds["udr_blind_ft"] = time.time() - t
+        add("udr_blind_ft", _scores(r, plant, args.episodes, S))
     if "lsdr" in methods:
         t = time.time()
         r = _train(base, "lsdr", work, num_seeds=S, algo="lsdr", algo_options={"dist": "gaussian"}, dr=_wide(setup))
         seconds["lsdr"] = time.time() - t
         add("lsdr", _scores(r, plant, args.episodes, S))
-    if not needs_nominal - {"nominal", "oracle_ft"}:
+    if not needs_nominal - {"nominal", "oracle_ft", "udr_blind_ft"}:
         return write(args, setup, rows, diagnoses, seconds)
     # the one real budget: 3 episodes of each seed's nominal policy; SimOpt compares at the env's
     # control step, so it reads the same recordings thinned to that step (the plant logs finer: the
