@@ -221,7 +221,8 @@ def main(args: Settings):
     if "oracle_ft" in methods:
         t = time.time()
         r = _train(base, "oracle_ft", work, num_seeds=S, dr=DRConfig(fixed=dict(setup["truth"])),
-                   algo_options={**base.algo_options, "warm_start": nominal, "warm_std": args.warm_std})
+                   algo_options={**base.algo_options, "warm_start": nominal,
+                                                 **({"warm_std": args.warm_std} if args.warm_std else {})})
         seconds["oracle_ft"] = time.time() - t
         add("oracle_ft", _scores(r, plant, args.episodes, S))
     if "udr_wide" in methods:
@@ -237,7 +238,8 @@ def main(args: Settings):
     if "udr_blind_ft" in methods:
         t = time.time()
         r = _train(base, "udr_blind_ft", work, num_seeds=S, dr=_wide(setup, "blind"),
-                   algo_options={**base.algo_options, "warm_start": nominal, "warm_std": args.warm_std})
+                   algo_options={**base.algo_options, "warm_start": nominal,
+                                                 **({"warm_std": args.warm_std} if args.warm_std else {})})
         seconds["udr_blind_ft"] = time.time() - t
         add("udr_blind_ft", _scores(r, plant, args.episodes, S))
     if "lsdr" in methods:
@@ -295,13 +297,11 @@ def main(args: Settings):
         diag_opts = [a.strip() for a in args.diagnose_set.split(";") if a.strip()]
         for s in per_seed:
             b = dataclasses.replace(base, seed=s)
-            if args.loop_warm_start and args.warm_std:
-                b = dataclasses.replace(b, algo_options={**b.algo_options, "warm_std": args.warm_std})
             try:
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
                                      run_seed=s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
                                      deterministic=args.loop_deterministic, until_end=args.record_until_end,
-                                     diagnose_options=diag_opts)
+                                     diagnose_options=diag_opts, warm_std=args.warm_std if args.loop_warm_start else 0.0)
             except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
                 _not_run("diag_dr_1", s, f"the diagnosis refused the nominal policy's recordings ({e})")
                 continue
@@ -316,7 +316,7 @@ def main(args: Settings):
                     it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
                                          seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
                                          deterministic=args.loop_deterministic, until_end=args.record_until_end,
-                                         diagnose_options=diag_opts)
+                                         diagnose_options=diag_opts, warm_std=args.warm_std if args.loop_warm_start else 0.0)
                 except RecordingError as e:
                     _not_run("diag_dr_2", s, f"the diagnosis refused the first loop's recordings ({e})")
                     continue

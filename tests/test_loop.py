@@ -229,12 +229,14 @@ def test_one_loop_iteration_end_to_end(tmp_path):
                "ppo.num_steps=16", "ppo.num_minibatches=2", "ppo.num_epochs=2", "ppo.net.hidden=[16,16]", *SHORT,
                f"target={PLANT}", "episodes=2", "eval_episodes=2", f"out={out}", "progress=false", "noise=1e-3",
                "diagnose.effects=[coulomb_friction,action_delay]",  # (a toy policy: keep the answer to what the env can take)
-               "warm_start=true"])
+               "warm_start=true", "warm_std=0.6"])
     res = json.load(open(out / "loop.json"))
     assert set(res["scores"]) == {"nominal", "iter_1"}
     cfg = yaml.safe_load(open(out / "iter_1" / "run" / "config.yaml"))
     assert cfg["dr"]["from_diagnosis"].endswith("diagnosis")
     assert cfg["algo_options"]["warm_start"] == str(out / "nominal")  # fine-tunes the recorded policy
+    assert cfg["algo_options"]["warm_std"] == 0.6                        # ... with its exploration restarted
+    assert "warm_std" not in yaml.safe_load(open(out / "nominal" / "config.yaml"))["algo_options"]
     d = json.load(open(out / "iter_1" / "diagnosis" / "diagnosis.json"))
     # whatever was fitted is the new run's physics: in its box or fixed
     for name in d["fitted_params"]:
@@ -405,3 +407,16 @@ def test_render_draws_the_nominal_and_the_box_corners_side_by_side(tmp_path, dr_
         _script("render").main([f"run={run}", f"out={out}"])
     with pytest.raises(config_lib.ConfigError, match="a .gif or .mp4"):
         _script("render").main([f"run={run}", f"out={tmp_path / 'v.avi'}"])
+
+
+def test_loop_settings_that_cannot_apply_are_refused():
+    from sim2real.common.config import ConfigError
+    from sim2real.tools.loop import LoopConfig
+
+    with pytest.raises(ConfigError, match="warm_std=0.6: restarts a warm start's exploration; set warm_start=true"):
+        LoopConfig(target="real.xml", out="o", warm_std=0.6)
+    with pytest.raises(ConfigError, match="warm_std=-1"):
+        LoopConfig(target="real.xml", out="o", warm_start=True, warm_std=-1.0)
+    with pytest.raises(ConfigError, match="episodes=1"):
+        LoopConfig(target="real.xml", out="o", episodes=1)
+    assert LoopConfig(target="real.xml", out="o", warm_start=True, warm_std=0.6).warm_std == 0.6

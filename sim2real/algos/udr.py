@@ -34,6 +34,9 @@ class UDRConfig:
     def __post_init__(self):
         if not 0.0 <= self.warm_std < 1e3:
             raise ValueError(f"algo_options.warm_std={self.warm_std}: an action standard deviation >= 0 (0: the warm start's own)")
+        if self.warm_std and not self.warm_start:
+            raise ValueError(f"algo_options.warm_std={self.warm_std}: restarts a warm start's exploration; "
+                             "set algo_options.warm_start=RUN")
 
 
 class UDR(OuterLoop):

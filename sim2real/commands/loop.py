@@ -60,7 +60,7 @@ def main(argv):
         it = loop.iteration(run, base, own.target, os.path.join(out, f"iter_{k}"), own.episodes,
                             seed=own.seed + k, noise=own.noise, deterministic=own.deterministic,
                             diagnose_options=diag_opts, progress=own.progress, warm_start=own.warm_start,
-                            fallback=own.fallback, until_end=own.until_end)
+                            fallback=own.fallback, until_end=own.until_end, warm_std=own.warm_std)
         d = it["diagnosis"]
         print(f"iteration {k}: recorded return {it['real_return']:.1f}; diagnosis: {d['answer']}"
               + "".join(f"; {s['effect']}" + (f"@{s['target']}" if s["target"] else "") + " "

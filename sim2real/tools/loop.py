@@ -56,9 +56,11 @@ class LoopConfig:
         and observation statistics; a fresh optimiser) instead of from scratch, as a researcher
         fine-tunes the deployed policy. It keeps what that policy learnt where the diagnosed
         physics is harder to learn from scratch (the cart-pole swing-up against 3 N of stiction:
-        ``benchmarks/closed_loop.py``). A policy trained to the end of its schedule explores
-        little; ``algo_options.warm_std=0.61`` (a training key: UDR's) restarts its action
-        standard deviation (there the loop's return went from 432 to 635, README).
+        ``benchmarks/closed_loop.py``).
+      warm_std: with ``warm_start``, the retraining's action standard deviation restarts at this
+        (UDR's ``algo_options.warm_std``; 0: the recorded policy's own). A policy trained to the
+        end of its schedule explores little; at 0.61 (the network's initial std) the cart-pole's
+        loop went from 432 to 635 (README, "Restarting exploration when fine-tuning").
       fallback: the randomisation an iteration trains on when its diagnosis is ``unusable``
         (``fallback.params=[...] fallback.low=[...] fallback.high=[...]``, as ``dr.*``); empty:
         it trains on the diagnosis anyway, with a warning.
@@ -76,6 +78,7 @@ class LoopConfig:
     overwrite: bool = False
     progress: bool = True
     warm_start: bool = False
+    warm_std: float = 0.0
     fallback: DRConfig = DRConfig()
 
     def __post_init__(self):
@@ -88,6 +91,10 @@ class LoopConfig:
                 raise ConfigError(f"{k}={getattr(self, k)}: must be a positive integer")
         if self.episodes < 2:
             raise ConfigError(f"episodes={self.episodes}: must be >= 2 (the last one is held out)")
+        if self.warm_std and not self.warm_start:
+            raise ConfigError(f"warm_std={self.warm_std}: restarts a warm start's exploration; set warm_start=true")
+        if not 0 <= self.warm_std < 1e3:
+            raise ConfigError(f"warm_std={self.warm_std}: an action standard deviation >= 0 (0: the policy's own)")
 
 
 def env_model_path(env) -> str:
@@ -109,12 +116,13 @@ def unusable(d: dict) -> str | None:
 def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: int = 3, seed: int = 0,
               run_seed: int = 0, noise: float = 0.0, deterministic: bool = True, diagnose_options=(),
               progress: bool = False, warm_start: bool = False, fallback: DRConfig | None = None,
-              until_end: bool = False) -> dict:
+              until_end: bool = False, warm_std: float = 0.0) -> dict:
     """One loop iteration from the policy of ``run_dir`` (seed ``run_seed``); returns what it did
     (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded
     episodes, ``trained_on``: ``diagnosis`` or ``fallback``, and ``why`` the diagnosis was not
     used). ``warm_start``: the retraining starts from that policy (seed ``run_seed`` for a one-seed
-    ``base``, else each seed from its own). ``fallback``: the randomisation to train on when the
+    ``base``, else each seed from its own), restarted at action std ``warm_std`` where that is
+    set (``LoopConfig.warm_std``). ``fallback``: the randomisation to train on when the
     diagnosis is ``unusable`` (``LoopConfig.fallback``); ``until_end``: ``LoopConfig.until_end``."""
     import warnings
 
@@ -160,7 +168,8 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
             cfg = dataclasses.replace(cfg, env_options={**dict(base.env_options), "max_delay": need})
     if warm_start:
         cfg = dataclasses.replace(cfg, algo_options={**cfg.algo_options, "warm_start": os.path.abspath(run_dir),
-                                                     "warm_start_seed": run_seed if base.num_seeds == 1 else -1})
+                                                     "warm_start_seed": run_seed if base.num_seeds == 1 else -1,
+                                                     **({"warm_std": warm_std} if warm_std else {})})
     res = train(cfg)
     return {"recordings": paths, "real_return": what["mean_return"], "run": res["run_dir"],
             "trained_on": "diagnosis" if dr.from_diagnosis else "fallback", "why": why or "",

@@ -449,10 +449,11 @@ def export_policy(algo, state, path: str, write: bool = True) -> None:
 
 def _without_warm_start(cfg: TrainConfig) -> TrainConfig:
     """A saved run's config for loading it: its trained state replaces any warm start, so the
-    warm start's source need not exist any more."""
+    warm start's source need not exist any more (nor what was set about it: ``warm_std``)."""
     if "warm_start" not in cfg.algo_options:
         return cfg
-    return dataclasses.replace(cfg, algo_options={k: v for k, v in cfg.algo_options.items() if k != "warm_start"})
+    return dataclasses.replace(cfg, algo_options={k: v for k, v in cfg.algo_options.items()
+                                                  if k not in ("warm_start", "warm_std")})
 
 
 def _rebuild(run_dir: str):
