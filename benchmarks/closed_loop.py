@@ -25,8 +25,9 @@ effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim
 - ``diag_dr_2``: the loop twice (record again with the new policy, diagnose again, retrain).
 - ``oracle_ft``: the oracle's physics, fine-tuned from each seed's nominal policy (the fair upper
   bound for the loop with ``loop_warm_start=true``: the same steps, the same start);
-- ``udr_blind_ft``: the ``blind`` box, fine-tuned from each seed's nominal policy (wide DR with the
-  loop's history: its fair baseline with ``loop_warm_start=true``).
+- ``udr_blind_ft``: the ``blind`` box, fine-tuned from each seed's nominal policy (restarted at
+  ``warm_std`` where set; wide DR with the loop's history: its fair baseline with
+  ``loop_warm_start=true``).
 
 With ``loop_warm_start=true`` every retraining of the loop starts from the policy that made its
 recordings (``sim2real/tools/loop.py``), so the loop's policies have had the nominal training's
