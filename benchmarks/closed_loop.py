@@ -212,6 +212,8 @@ def main(args: Settings):
         t = time.time()
         nominal = _train(base, "nominal", work, num_seeds=S)
         seconds["nominal"] = time.time() - t
+        # what every method fine-tuned from the nominal policy starts with
+        fine_tune = {**base.algo_options, "warm_start": nominal, **({"warm_std": args.warm_std} if args.warm_std else {})}
         if "nominal" in methods:
             add("nominal", _scores(nominal, plant, args.episodes, S))
     if "oracle" in methods:
@@ -222,8 +224,7 @@ def main(args: Settings):
     if "oracle_ft" in methods:
         t = time.time()
         r = _train(base, "oracle_ft", work, num_seeds=S, dr=DRConfig(fixed=dict(setup["truth"])),
-                   algo_options={**base.algo_options, "warm_start": nominal,
-                                                 **({"warm_std": args.warm_std} if args.warm_std else {})})
+                   algo_options=fine_tune)
         seconds["oracle_ft"] = time.time() - t
         add("oracle_ft", _scores(r, plant, args.episodes, S))
     if "udr_wide" in methods:
@@ -238,9 +239,7 @@ def main(args: Settings):
         add("udr_blind", _scores(r, plant, args.episodes, S))
     if "udr_blind_ft" in methods:
         t = time.time()
-        r = _train(base, "udr_blind_ft", work, num_seeds=S, dr=_wide(setup, "blind"),
-                   algo_options={**base.algo_options, "warm_start": nominal,
-                                                 **({"warm_std": args.warm_std} if args.warm_std else {})})
+        r = _train(base, "udr_blind_ft", work, num_seeds=S, dr=_wide(setup, "blind"), algo_options=fine_tune)
         seconds["udr_blind_ft"] = time.time() - t
         add("udr_blind_ft", _scores(r, plant, args.episodes, S))
     if "lsdr" in methods:
@@ -296,13 +295,14 @@ def main(args: Settings):
         # wide box: what the user would randomise without a diagnosis (``loop.unusable``)
         fallback = _wide(setup) if args.loop_fallback else None
         diag_opts = [a.strip() for a in args.diagnose_set.split(";") if a.strip()]
+        loop_std = args.warm_std if args.loop_warm_start else 0.0
         for s in per_seed:
             b = dataclasses.replace(base, seed=s)
             try:
                 it1 = loop.iteration(nominal, b, plant, os.path.join(work, f"loop_{s}", "iter_1"), 3, seed=100 + s,
                                      run_seed=s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
                                      deterministic=args.loop_deterministic, until_end=args.record_until_end,
-                                     diagnose_options=diag_opts, warm_std=args.warm_std if args.loop_warm_start else 0.0)
+                                     diagnose_options=diag_opts, warm_std=loop_std)
             except RecordingError as e:  # the diagnosis refuses what the nominal policy recorded
                 _not_run("diag_dr_1", s, f"the diagnosis refused the nominal policy's recordings ({e})")
                 continue
@@ -317,7 +317,7 @@ def main(args: Settings):
                     it2 = loop.iteration(it1["run"], b, plant, os.path.join(work, f"loop_{s}", "iter_2"), 3,
                                          seed=200 + s, noise=1e-3, warm_start=args.loop_warm_start, fallback=fallback,
                                          deterministic=args.loop_deterministic, until_end=args.record_until_end,
-                                         diagnose_options=diag_opts, warm_std=args.warm_std if args.loop_warm_start else 0.0)
+                                         diagnose_options=diag_opts, warm_std=loop_std)
                 except RecordingError as e:
                     _not_run("diag_dr_2", s, f"the diagnosis refused the first loop's recordings ({e})")
                     continue

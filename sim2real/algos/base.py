@@ -108,6 +108,8 @@ class OuterLoop:
         folders is the driver's, so no algorithm imports it.
       warm_start_seed: which seed of that run starts every seed here (-1: all of them, one per
         seed here, or its only one).
+      warm_std: the action standard deviation that policy restarts from (0: its own; set from
+        options that offer it, UDR's ``warm_std``).
       warm: ``(params [S, ...], obs_stats [S, ...])`` of that policy once :meth:`start_from` ran
         (None otherwise); the algorithm's ``init_seeds`` starts from it.
       adapts: the algorithm meta-learns a policy that adapts to given physics (:meth:`adapt`;
@@ -117,6 +119,7 @@ class OuterLoop:
     takes_update_index: bool = False
     warm_start_from: str = ""
     warm_start_seed: int = -1
+    warm_std: float = 0.0
     warm: Any = None
     adapts: bool = False
 
@@ -165,10 +168,14 @@ class OuterLoop:
         self.warm = jax.tree_util.tree_map(tile, (params, obs_stats))
 
     def warm_ppo(self, ppo_state):
-        """``ppo_state`` (every seed's) with the warm start's policy in it, or as it is without one."""
+        """``ppo_state`` (every seed's) with the warm start's policy in it (its action standard
+        deviation ``warm_std`` where that is set), or as it is without one."""
         if self.warm is None:
             return ppo_state
         params, obs_stats = self.warm
+        if self.warm_std > 0:
+            log_std = jnp.full_like(params["params"]["log_std"], jnp.log(self.warm_std))
+            params = {**params, "params": {**params["params"], "log_std": log_std}}
         return ppo_state.replace(params=params, obs_stats=obs_stats)
 
 

@@ -9,8 +9,8 @@ def _udr(env, cfg):
     from sim2real.algos.udr import UDR, UDRConfig
 
     opts = config_lib.from_dict(UDRConfig, cfg.algo_options, "algo_options.")
-    algo = UDR(env, cfg.ppo, cfg.dr, cfg.num_updates, warm_std=opts.warm_std)
-    algo.warm_start_from, algo.warm_start_seed = opts.warm_start, opts.warm_start_seed
+    algo = UDR(env, cfg.ppo, cfg.dr, cfg.num_updates)
+    algo.warm_start_from, algo.warm_start_seed, algo.warm_std = opts.warm_start, opts.warm_start_seed, opts.warm_std
     return algo
 
 

@@ -45,9 +45,8 @@ class UDR(OuterLoop):
     State: :class:`PPOState`. ``update(state) -> (state, metrics)`` is one PPO iteration.
     """
 
-    def __init__(self, env: Env, ppo_cfg: PPOConfig, dr: DRConfig, num_updates: int, warm_std: float = 0.0):
+    def __init__(self, env: Env, ppo_cfg: PPOConfig, dr: DRConfig, num_updates: int):
         self.env = env
-        self.warm_std = warm_std
         self.space = DRSpace(env, dr)
         ctx = Context.make(env, self.space.names, self.space.low, self.space.high) if len(self.space) else None
         self.ppo = PPO(env, ppo_cfg, num_updates, ctx)
@@ -64,14 +63,8 @@ class UDR(OuterLoop):
         return self.ppo.init(key, self.sampler())
 
     def init_seeds(self, keys) -> PPOState:
-        """``init`` for every seed's key ``[S, 2]``; the policy from the warm start when one is loaded
-        (its action standard deviation ``warm_std`` where that is set)."""
-        st = self.warm_ppo(jax.vmap(self.init)(keys))
-        if self.warm is None or self.warm_std <= 0:
-            return st
-        p = st.params
-        log_std = jnp.full_like(p["params"]["log_std"], jnp.log(self.warm_std))
-        return st.replace(params={**p, "params": {**p["params"], "log_std": log_std}})
+        """``init`` for every seed's key ``[S, 2]``; the policy from the warm start when one is loaded."""
+        return self.warm_ppo(jax.vmap(self.init)(keys))
 
     def update(self, st: PPOState):
         return self.ppo.update(st, self.sampler())

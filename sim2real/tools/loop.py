@@ -93,8 +93,13 @@ class LoopConfig:
             raise ConfigError(f"episodes={self.episodes}: must be >= 2 (the last one is held out)")
         if self.warm_std and not self.warm_start:
             raise ConfigError(f"warm_std={self.warm_std}: restarts a warm start's exploration; set warm_start=true")
-        if not 0 <= self.warm_std < 1e3:
-            raise ConfigError(f"warm_std={self.warm_std}: an action standard deviation >= 0 (0: the policy's own)")
+        if self.warm_std:  # its bounds are UDR's, which the retraining gets it as (checked now, not after training)
+            from sim2real.algos.udr import UDRConfig
+
+            try:
+                UDRConfig(warm_start=self.out, warm_std=self.warm_std)
+            except ValueError as e:
+                raise ConfigError(str(e)) from None
 
 
 def env_model_path(env) -> str:
