@@ -27,7 +27,8 @@ effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim
   bound for the loop with ``loop_warm_start=true``: the same steps, the same start);
 - ``udr_blind_ft``: the ``blind`` box, fine-tuned from each seed's nominal policy (restarted at
   ``warm_std`` where set; wide DR with the loop's history: its fair baseline with
-  ``loop_warm_start=true``).
+  ``loop_warm_start=true``);
+- ``udr_wide_ft``: the same with the ``wide`` box (the hopper has no ``blind`` box).
 
 With ``loop_warm_start=true`` every retraining of the loop starts from the policy that made its
 recordings (``sim2real/tools/loop.py``), so the loop's policies have had the nominal training's
@@ -144,7 +145,10 @@ class Settings:
     ``;`` (e.g. ``ppo.num_envs=1024;ppo.num_minibatches=16``); diagnose_set: the loop's diagnosis
     settings, the same way (e.g. ``effects=[...,motor_lag_all]``: a lag shared by every motor);
     warm_std: the fine-tuned methods (``oracle_ft``, the loop with ``loop_warm_start``) restart from
-    this action standard deviation (``UDRConfig.warm_std``; 0: the nominal policy's own)."""
+    this action standard deviation (``UDRConfig.warm_std``; 0: the nominal policy's own);
+    nominal: an earlier call's nominal run folder (``<its work>/<env>/nominal``, outside this call's
+    ``work``, which is emptied) used instead of training the nominal policy again, if its config is
+    the one this call would train (a cart-pole follow-up call is then 7-8 min shorter)."""
     env: str = "pendulum"
     seeds: int = 3
     episodes: int = 64
@@ -162,10 +166,11 @@ class Settings:
     config_set: str = ""
     diagnose_set: str = ""
     warm_std: float = 0.0
+    nominal: str = ""
 
 NOTES: dict[str, str] = {}  # "<method> seed <s>" -> why it was not run (notes.json and the summary)
 METHODS = ("nominal", "oracle", "udr_wide", "udr_blind", "lsdr", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2",
-           "oracle_ft", "udr_blind_ft")
+           "oracle_ft", "udr_blind_ft", "udr_wide_ft")
 
 
 def main(args: Settings):
@@ -180,6 +185,9 @@ def main(args: Settings):
     setup = SETUPS[args.env]
     plant = os.path.join(ROOT, setup["plant"])
     work = os.path.join(args.work, args.env)
+    if args.nominal and os.path.realpath(args.nominal).startswith(os.path.realpath(work) + os.sep):
+        raise SystemExit(f"nominal={args.nominal} lies in this call's work folder {work}, which is emptied first: "
+                         f"move it out or give another work=")
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, setup['config'])}", "num_seeds=1",
@@ -207,11 +215,15 @@ def main(args: Settings):
     if blind and "blind" not in setup:
         raise SystemExit(f"methods: {', '.join(sorted(blind))} need a blind box; env={args.env} has none "
                          f"(pendulum, cartpole)")
-    needs_nominal = {"nominal", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2", "oracle_ft", "udr_blind_ft"} & set(methods)
+    fine_tuned = {"oracle_ft", "udr_blind_ft", "udr_wide_ft"}
+    needs_nominal = ({"nominal", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2"} | fine_tuned) & set(methods)
     if needs_nominal:
         t = time.time()
-        nominal = _train(base, "nominal", work, num_seeds=S)
-        seconds["nominal"] = time.time() - t
+        if args.nominal:
+            nominal = _earlier_nominal(args.nominal, base, S)
+        else:
+            nominal = _train(base, "nominal", work, num_seeds=S)
+            seconds["nominal"] = time.time() - t
         # what every method fine-tuned from the nominal policy starts with
         fine_tune = {**base.algo_options, "warm_start": nominal, **({"warm_std": args.warm_std} if args.warm_std else {})}
         if "nominal" in methods:
@@ -237,17 +249,18 @@ def main(args: Settings):
         r = _train(base, "udr_blind", work, num_seeds=S, dr=_wide(setup, "blind"))
         seconds["udr_blind"] = time.time() - t
         add("udr_blind", _scores(r, plant, args.episodes, S))
-    if "udr_blind_ft" in methods:
-        t = time.time()
-        r = _train(base, "udr_blind_ft", work, num_seeds=S, dr=_wide(setup, "blind"), algo_options=fine_tune)
-        seconds["udr_blind_ft"] = time.time() - t
-        add("udr_blind_ft", _scores(r, plant, args.episodes, S))
+    for method, box in (("udr_blind_ft", "blind"), ("udr_wide_ft", "wide")):
+        if method in methods:
+            t = time.time()
+            r = _train(base, method, work, num_seeds=S, dr=_wide(setup, box), algo_options=fine_tune)
+            seconds[method] = time.time() - t
+            add(method, _scores(r, plant, args.episodes, S))
     if "lsdr" in methods:
         t = time.time()
         r = _train(base, "lsdr", work, num_seeds=S, algo="lsdr", algo_options={"dist": "gaussian"}, dr=_wide(setup))
         seconds["lsdr"] = time.time() - t
         add("lsdr", _scores(r, plant, args.episodes, S))
-    if not needs_nominal - {"nominal", "oracle_ft", "udr_blind_ft"}:
+    if not needs_nominal - {"nominal"} - fine_tuned:
         return write(args, setup, rows, diagnoses, seconds)
     # the one real budget: 3 episodes of each seed's nominal policy; SimOpt compares at the env's
     # control step, so it reads the same recordings thinned to that step (the plant logs finer: the
@@ -333,6 +346,25 @@ def main(args: Settings):
         if r2:
             add("diag_dr_2", r2, s2)
     write(args, setup, rows, diagnoses, seconds)
+
+
+def _earlier_nominal(path: str, base, seeds: int) -> str:
+    """An earlier call's nominal run folder, refused unless it is what this call would train:
+    its saved config equal to this call's but for where it was written and how it reported."""
+    from sim2real.common import config as config_lib
+    from sim2real.training.driver import TrainConfig
+
+    cfg_path = os.path.join(path, "config.yaml")
+    if not os.path.exists(os.path.join(path, "policy.msgpack")) or not os.path.exists(cfg_path):
+        raise SystemExit(f"nominal={path}: not a finished run folder (no config.yaml or policy.msgpack)")
+    saved = config_lib.load(TrainConfig, [f"config={cfg_path}"])
+    want = dataclasses.replace(base, name="nominal", num_seeds=seeds)
+    same = ("out_dir", "progress", "tensorboard", "resume", "name")
+    diff = [f.name for f in dataclasses.fields(TrainConfig) if f.name not in same
+            and getattr(saved, f.name) != getattr(want, f.name)]
+    if diff:
+        raise SystemExit(f"nominal={path}: trained with other settings than this call's ({', '.join(diff)})")
+    return path
 
 
 def _blind_simopt(setup: dict) -> dict:
