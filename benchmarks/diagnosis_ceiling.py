@@ -41,6 +41,7 @@ from typing import Literal
 import numpy as np
 
 from sim2real.common.cli import settings
+from sim2real.envs.parallel import cpu_cores
 
 import diagnosis_independent as bench
 import sysid_cases
@@ -255,7 +256,7 @@ def main(args: Settings):
         raise SystemExit(f"not cases of the {args.split} list: {sorted(unknown)[:5]}")
     import jax
 
-    devices = max(1, (os.cpu_count() or 1) // args.jobs)
+    devices = max(1, cpu_cores() // args.jobs)
     jax.config.update("jax_num_cpu_devices", devices)
     print(f"{len(cases)} cases of the {args.split} list, {args.jobs} at a time", flush=True)
     os.makedirs(args.work, exist_ok=True)

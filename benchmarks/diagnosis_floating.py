@@ -36,6 +36,7 @@ import mujoco
 import numpy as np
 
 from sim2real.common.cli import settings
+from sim2real.envs.parallel import cpu_cores
 
 from diagnosis_independent import _key, _param_errors, named_keys  # one scorer for both benchmarks
 
@@ -272,7 +273,7 @@ def summarise(rows: list[dict], jobs: int = 1) -> str:
          f"- parameter-only cases with an effect named: **{sum(r['named'] != 'none' for r in none)}/{len(none)}**",
          f"- held-out error never worse than the nominal model's: {pct(sum(r.get('never_worse') is True for r in rows), len(rows))}",
          f"- named effects' parameters within 25% of the truth: {pct(sum(e <= 0.25 for e in errs), len(errs))}",
-         f"- seconds per case ({os.cpu_count()} CPU cores, {jobs} case(s) at a time, the case's generation included): median "
+         f"- seconds per case ({cpu_cores()} CPU cores, {jobs} case(s) at a time, the case's generation included): median "
          f"{np.median([r['seconds'] for r in rows]):.1f}, max {max(r['seconds'] for r in rows):.1f}",
          f"- errors (crashes): {sum(r['named'] == 'error' for r in rows)}", "",
          "| case | rate (Hz) | step (ms) | noise | qvel | named | correct | parameter error | held-out before -> after | s |",

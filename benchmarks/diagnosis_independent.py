@@ -30,6 +30,7 @@ from typing import Any, Literal
 import numpy as np
 
 from sim2real.common.cli import settings
+from sim2real.envs.parallel import cpu_cores
 
 import sysid_cases
 
@@ -139,7 +140,7 @@ def summarise(rows: list[dict], title: str, jobs: int = 1, devices: int = 1) -> 
          f"- held-out error never worse than the nominal model's: "
          f"**{pct(sum(r.get('never_worse') is True for r in rows), len(rows))}**",
          f"- named effects' parameters within 25% of the truth: **{pct(sum(r['params_within_25'] is True for r in named_rows), len(named_rows))}**",
-         f"- seconds per case ({os.cpu_count()} CPU cores, {jobs} case(s) at a time, {devices} XLA CPU device(s) each): median {np.median([r['seconds'] for r in rows]):.1f}, "
+         f"- seconds per case ({cpu_cores()} CPU cores, {jobs} case(s) at a time, {devices} XLA CPU device(s) each): median {np.median([r['seconds'] for r in rows]):.1f}, "
          f"max {np.max([r['seconds'] for r in rows]):.1f}; 8 s recordings: median "
          f"{np.median([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}, max "
          f"{np.max([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}",
@@ -197,7 +198,7 @@ def main(args: Settings):
     # backend deadlocks); each starts its own with that many CPU devices.
     import jax
 
-    devices = max(1, (os.cpu_count() or 1) // args.jobs)
+    devices = max(1, cpu_cores() // args.jobs)
     jax.config.update("jax_num_cpu_devices", devices)
     print(f"{len(cases)} cases (case list {sysid_cases.fingerprint(listed)}), {args.jobs} at a time, "
           f"{devices} CPU device(s) each", flush=True)

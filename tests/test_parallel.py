@@ -148,3 +148,25 @@ def test_data_parallel_refuses_what_it_cannot_split():
     with pytest.raises(ValueError, match="ppo.num_steps=10 must be divisible by ppo.num_minibatches=4"):
         check(PPOConfig(data_parallel=True, num_steps=10, num_envs=4))
 
+
+
+def test_one_device_per_core_the_process_may_use():
+    """A process pinned to one core (``taskset``, a container's cpuset) declares one CPU device,
+    not one per core of the host: ``os.cpu_count()`` would oversubscribe that core."""
+    import os
+
+    import pytest
+
+    if not hasattr(os, "sched_setaffinity"):
+        pytest.skip("no CPU affinity on this OS")
+    script = textwrap.dedent("""
+        import os
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+        from sim2real.envs import parallel
+        assert parallel.cpu_cores() == 1, parallel.cpu_cores()
+        assert parallel.use_cpu_cores() == 1
+        print("ok", os.cpu_count())
+    """)
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.startswith("ok")

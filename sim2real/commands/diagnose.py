@@ -59,7 +59,7 @@ def run(argv=None):
     from sim2real.sysid import shooting
 
     try:  # sysid.shooting's physics vectors per call split over the cores (only before JAX starts)
-        parallel.use_cpu_cores(min(os.cpu_count() or 1, shooting.B))
+        parallel.use_cpu_cores(min(parallel.cpu_cores(), shooting.B))
     except RuntimeError:
         pass
     main_guard(main, sys.argv[1:] if argv is None else argv, doc=__doc__, configs=HELP)

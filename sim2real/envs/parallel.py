@@ -35,13 +35,23 @@ import jax
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 
+def cpu_cores() -> int:
+    """The CPU cores this process may run on: its affinity mask where the OS has one (``taskset``,
+    a container's cpuset), else every core of the host. ``os.cpu_count()`` counts the host's, so
+    on a 16-core host a process pinned to 2 would declare 16 devices and oversubscribe its 2."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except AttributeError:  # macOS, Windows: no affinity mask in the os module
+        return os.cpu_count() or 1
+
+
 def use_cpu_cores(n: int | None = None) -> int:
-    """Expose ``n`` CPU devices (default: one per core); call before JAX runs anything.
+    """Expose ``n`` CPU devices (default: one per core, ``cpu_cores()``); call before JAX runs anything.
 
     Returns the number of CPU devices now visible. Raises ``RuntimeError`` if JAX's backends are
     already initialised with a different count (the setting only applies at start-up).
     """
-    n = int(n or os.cpu_count() or 1)
+    n = int(n or cpu_cores())
     if n < 1:
         raise ValueError(f"use_cpu_cores: n must be >= 1, got {n}")
     try:
