@@ -218,10 +218,10 @@ def main(args: Settings):
     fine_tuned = {"oracle_ft", "udr_blind_ft", "udr_wide_ft"}
     needs_nominal = ({"nominal", "simopt", "simopt_blind", "diag_dr_1", "diag_dr_2"} | fine_tuned) & set(methods)
     if needs_nominal:
-        t = time.time()
         if args.nominal:
             nominal = _earlier_nominal(args.nominal, base, S)
         else:
+            t = time.time()
             nominal = _train(base, "nominal", work, num_seeds=S)
             seconds["nominal"] = time.time() - t
         # what every method fine-tuned from the nominal policy starts with
