@@ -148,7 +148,9 @@ class Settings:
     this action standard deviation (``UDRConfig.warm_std``; 0: the nominal policy's own);
     nominal: an earlier call's nominal run folder (``<its work>/<env>/nominal``, outside this call's
     ``work``, which is emptied) used instead of training the nominal policy again, if its config is
-    the one this call would train (a cart-pole follow-up call is then 7-8 min shorter)."""
+    the one this call would train (a cart-pole follow-up call is then 7-8 min shorter; the
+    diagnosis box's ``dr.diagnosis_k`` and ``dr.diagnosis_box`` may differ: a nominal run has no
+    diagnosis)."""
     env: str = "pendulum"
     seeds: int = 3
     episodes: int = 64
@@ -359,6 +361,9 @@ def _earlier_nominal(path: str, base, seeds: int) -> str:
         raise SystemExit(f"nominal={path}: not a finished run folder (no config.yaml or policy.msgpack)")
     saved = config_lib.load(TrainConfig, [f"config={cfg_path}"])
     want = dataclasses.replace(base, name="nominal", num_seeds=seeds)
+    if not saved.dr.from_diagnosis and not want.dr.from_diagnosis:  # then how a diagnosis' box is drawn is unused
+        saved = dataclasses.replace(saved, dr=dataclasses.replace(
+            saved.dr, diagnosis_k=want.dr.diagnosis_k, diagnosis_box=want.dr.diagnosis_box))
     same = ("out_dir", "progress", "tensorboard", "resume", "name")
     diff = [f.name for f in dataclasses.fields(TrainConfig) if f.name not in same
             and getattr(saved, f.name) != getattr(want, f.name)]

@@ -156,6 +156,16 @@ def test_diagnosis_becomes_the_physics_and_a_box_around_it(tmp_path):
     assert box["action_delay"] == pytest.approx((0.0, 1.2)) and "action_delay" not in span.fixed
     assert box["mass:pole"] == pytest.approx((env.spec["mass:pole"].default, 1.2))
     assert from_diagnosis.resolve(span, env) == span
+    # ``centred``: as far past the fitted value as back to the env's own, clipped to the bounds
+    # (the friction's and the delay's 0); past k std where the fit moved less than that
+    mid = from_diagnosis.resolve(DRConfig(from_diagnosis=diag, diagnosis_k=2.0, diagnosis_box="centred"), env)
+    box = dict(zip(mid.params, zip(mid.low, mid.high)))
+    assert box["coulomb:hinge"] == pytest.approx((0.0, 0.6))
+    assert box["action_delay"] == pytest.approx((0.0, 2.4))
+    m0 = env.spec["mass:pole"].default
+    assert box["mass:pole"] == pytest.approx((m0, 2.2 - m0))
+    assert from_diagnosis.box(1.0, 0.2, 0.9, 2.0, "centred") == pytest.approx((0.6, 1.4))
+    assert from_diagnosis.resolve(mid, env) == mid
     with pytest.raises(config_lib.ConfigError, match="dr.diagnosis_box='wide'"):
         from_diagnosis.resolve(DRConfig(from_diagnosis=diag, diagnosis_box="wide"), env)
 
@@ -301,6 +311,7 @@ def test_a_diagnosed_delay_past_the_envs_delay_line_lengthens_it(run_dir, tmp_pa
     monkeypatch.setattr(diag_lib, "diagnose", fake)
     it = loop.iteration(run_dir, tiny(tmp_path), PLANT, str(tmp_path / "it"), 2, noise=1e-3)
     assert from_diagnosis.delay_line(os.path.join(tmp_path, "it", "diagnosis"), env, 2.0) == 6  # ceil(5.2 + 2 * 0.3)
+    assert from_diagnosis.delay_line(os.path.join(tmp_path, "it", "diagnosis"), env, 2.0, "centred") == 11  # 2 * 5.2
     cfg = yaml.safe_load(open(os.path.join(it["run"], "config.yaml")))
     assert cfg["env_options"]["max_delay"] == 6
     i = cfg["dr"]["params"].index("action_delay")

@@ -25,7 +25,8 @@ class DRConfig:
         ``params``/``low``/``high``/``fixed`` when training starts).
       diagnosis_k: half-width of that box in standard deviations of the fit.
       diagnosis_box: ``std``: the box is ``value +- k std``; ``span``: it also reaches back to the
-        env's own (nominal) value, so training sees the model it had as well as the one found.
+        env's own (nominal) value, so training sees the model it had as well as the one found;
+        ``centred``: as far past the value as back to the env's own (``from_diagnosis.box``).
     """
 
     params: tuple[str, ...] = ()
@@ -34,7 +35,7 @@ class DRConfig:
     fixed: dict[str, float] = dataclasses.field(default_factory=dict)
     from_diagnosis: str = ""
     diagnosis_k: float = 2.0
-    diagnosis_box: Literal["std", "span"] = "std"
+    diagnosis_box: Literal["std", "span", "centred"] = "std"
 
 
 class DRSpace:

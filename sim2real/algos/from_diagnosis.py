@@ -9,7 +9,8 @@ the box also reaches back to the env's own value of the parameter (a friction fr
 from the model's): the fit's std says how well the recordings pin the value down, not how far
 the plant may be from the fitted model, and a box spanning the model the policy was trained on
 and the one found hedges between the two (and keeps the easier physics a policy learns first
-in the box; the closed-loop benchmark's cart-pole, README). The diagnosis' names are the
+in the box; the closed-loop benchmark's cart-pole, README). ``dr.diagnosis_box=centred`` goes as
+far past the fitted value as back to the env's own (``box``). The diagnosis' names are the
 env's (both come from ``physics/catalog.py``) with three translations: the delay is in recording
 samples there and in control steps here, a joint's declared damping is the env's
 ``joint_damping`` where that parameter drives exactly that joint, and a lag shared by every
@@ -145,10 +146,11 @@ def expressible(env: Env) -> list[str]:
     return names
 
 
-def delay_line(path: str, env: Env, k: float) -> int:
-    """Control steps of delay line that a diagnosis' box needs: ``ceil(delay + k std)`` of its
-    fitted ``action_delay`` in the env's steps (``ceil(delay)`` without a std; 0 without a
-    delay). ``scripts/loop.py`` raises ``env_options.max_delay`` to it, since a delay beyond the
+def delay_line(path: str, env: Env, k: float, kind: str = "std") -> int:
+    """Control steps of delay line that a diagnosis' box needs: the top of its fitted
+    ``action_delay``'s box (``box``; ``ceil(delay + k std)`` for ``std`` and ``span``, ``ceil(delay)``
+    without a std, ``ceil(2 delay)`` or more for ``centred``) in the env's steps; 0 without a
+    delay. ``scripts/loop.py`` raises ``env_options.max_delay`` to it, since a delay beyond the
     env's line is refused (the line's length is not in the observation, so a warm-started policy
     runs unchanged on a longer one)."""
     d = load(path)
@@ -157,7 +159,7 @@ def delay_line(path: str, env: Env, k: float) -> int:
         return 0
     sd = next((s["std"]["action_delay"] for s in d["selected"] if s.get("std", {}).get("action_delay") is not None),
               None)
-    top = float(value) + (k * float(sd) if sd is not None and np.isfinite(float(sd)) else 0.0)
+    top = box(float(value), float(sd) if sd is not None else float("nan"), 0.0, k, kind)[1]
     return int(math.ceil(top * _steps_per_sample(d, env) - 1e-9))
 
 
@@ -171,15 +173,36 @@ def _default_in_diagnosis(d: dict, name: str) -> float:
     return float(r["nominal"]) if r else 0.0
 
 
+BOXES = ("std", "span", "centred")
+
+
+def box(value: float, sd: float, default: float, k: float, kind: str) -> tuple[float, float]:
+    """The training range of one fitted parameter (before clipping to its bounds), in its units.
+
+    ``std``: ``value +- k sd``. ``span``: that, stretched back to the env's own ``default``.
+    ``centred``: ``value +- max(k sd, |value - default|)``: the distance the fit moved from the
+    model is taken as the scale of the model's error, and the fit as the best guess in the middle
+    of it: a tight fit of a 40 ms lag trains on 0-80 ms, where ``span`` stops at the fit and puts
+    a plant just past it at the box's edge. A NaN ``sd`` counts as 0."""
+    k_sd = k * sd if np.isfinite(sd) else 0.0
+    if kind == "centred":
+        half = max(k_sd, abs(value - default))
+        return value - half, value + half
+    lo, hi = value - k_sd, value + k_sd
+    if kind == "span":
+        lo, hi = min(lo, default), max(hi, default)
+    return lo, hi
+
+
 def resolve(dr: DRConfig, env: Env) -> DRConfig:
     """``dr`` with the diagnosis' physics added (unchanged when ``dr.from_diagnosis`` is empty)."""
     if not dr.from_diagnosis:
         return dr
     if not dr.diagnosis_k > 0:
         raise ConfigError(f"dr.diagnosis_k={dr.diagnosis_k}: must be > 0 (the box is value +- k std)")
-    if dr.diagnosis_box not in ("std", "span"):
-        raise ConfigError(f"dr.diagnosis_box={dr.diagnosis_box!r}: must be 'std' (value +- k std) or 'span' "
-                          "(that box reaching back to the env's own value)")
+    if dr.diagnosis_box not in BOXES:
+        raise ConfigError(f"dr.diagnosis_box={dr.diagnosis_box!r}: must be 'std' (value +- k std), 'span' "
+                          "(that box reaching back to the env's own value) or 'centred' (and as far past the value)")
     d = load(dr.from_diagnosis)
     params, low, high = list(dr.params), list(dr.low), list(dr.high)
     fixed = dict(dr.fixed)
@@ -191,10 +214,7 @@ def resolve(dr: DRConfig, env: Env) -> DRConfig:
             hint = " (raise env_options.max_delay; scripts/loop.py does)" if name == "action_delay" else ""
             raise ConfigError(f"dr.from_diagnosis: fitted {name} = {value:g} {p.unit} is outside the env's bounds "
                               f"[{p.low:g}, {p.high:g}]{hint}")
-        k_sd = dr.diagnosis_k * sd if np.isfinite(sd) else 0.0
-        lo, hi = value - k_sd, value + k_sd
-        if dr.diagnosis_box == "span":
-            lo, hi = min(lo, float(p.default)), max(hi, float(p.default))
+        lo, hi = box(value, sd, float(p.default), dr.diagnosis_k, dr.diagnosis_box)
         lo, hi = max(p.low, lo), min(p.high, hi)
         if hi - lo > 1e-6 * max(abs(value), 1e-6):  # (no std and ``std``: lo == hi)
             params.append(name)

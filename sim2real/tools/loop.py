@@ -122,22 +122,33 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
               run_seed: int = 0, noise: float = 0.0, deterministic: bool = True, diagnose_options=(),
               progress: bool = False, warm_start: bool = False, fallback: DRConfig | None = None,
               until_end: bool = False, warm_std: float = 0.0) -> dict:
-    """One loop iteration from the policy of ``run_dir`` (seed ``run_seed``); returns what it did
-    (``recordings``, ``diagnosis`` summary, ``run`` folder, ``real_return`` of the recorded
-    episodes, ``trained_on``: ``diagnosis`` or ``fallback``, and ``why`` the diagnosis was not
-    used). ``warm_start``: the retraining starts from that policy (seed ``run_seed`` for a one-seed
-    ``base``, else each seed from its own), restarted at action std ``warm_std`` where that is
-    set (``LoopConfig.warm_std``). ``fallback``: the randomisation to train on when the
-    diagnosis is ``unusable`` (``LoopConfig.fallback``); ``until_end``: ``LoopConfig.until_end``."""
-    import warnings
+    """One loop iteration from the policy of ``run_dir`` (seed ``run_seed``): ``diagnose`` then
+    ``retrain``; returns what it did (``recordings``, ``diagnosis`` summary, ``run`` folder,
+    ``real_return`` of the recorded episodes, ``trained_on``: ``diagnosis`` or ``fallback``, and
+    ``why`` the diagnosis was not used)."""
+    paths, what, d = diagnose(run_dir, base, target, out, episodes, seed, run_seed, noise, deterministic,
+                              diagnose_options, progress, until_end)
+    res, dr, why = retrain(run_dir, base, out, d, run_seed, progress, warm_start, fallback, warm_std)
+    return {"recordings": paths, "real_return": what["mean_return"], "run": res["run_dir"],
+            "trained_on": "diagnosis" if dr.from_diagnosis else "fallback", "why": why or "",
+            "diagnosis": {"answer": d["answer"],
+                          "selected": [{"effect": s["effect"], "target": s["target"], "params": s["params"]}
+                                       for s in d["selected"]],
+                          "fitted_params": d["fitted_params"], "heldout_nrmse": [d["fit"]["before"], d["fit"]["after"]]}}
 
+
+def diagnose(run_dir: str, base: TrainConfig, target: str, out: str, episodes: int = 3, seed: int = 0,
+             run_seed: int = 0, noise: float = 0.0, deterministic: bool = True, diagnose_options=(),
+             progress: bool = False, until_end: bool = False) -> tuple[list[str], dict, dict]:
+    """Steps 1-2 of an iteration: ``(recording paths, record summary, diagnosis.json)``, written
+    under ``out``; ``until_end``: ``LoopConfig.until_end``."""
     from sim2real.algos import from_diagnosis
     from sim2real.common import config as config_lib
     from sim2real.envs import make
     from sim2real.envs.registry import env_class
     from sim2real.tools.record import from_run, save
-    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
-    from sim2real.training.driver import train
+    from sim2real.sysid.diagnose import DiagnoseConfig
+    from sim2real.sysid.diagnose import diagnose as run_diagnosis
 
     if episodes < 2:
         raise config_lib.ConfigError(f"episodes={episodes}: the loop needs >= 2 (the last one is held out)")
@@ -155,7 +166,24 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
                                             f"heldout=[{paths[-1]}]", f"out={os.path.join(out, 'diagnosis')}",
                                             f"progress={str(progress).lower()}"] + list(diagnose_options))
     dcfg = dataclasses.replace(dcfg, targets=tuple(env_targets), expressible=tuple(env_names))
-    d = diagnose(dcfg)
+    return paths, what, run_diagnosis(dcfg)
+
+
+def retrain(run_dir: str, base: TrainConfig, out: str, d: dict, run_seed: int = 0, progress: bool = False,
+            warm_start: bool = False, fallback: DRConfig | None = None, warm_std: float = 0.0):
+    """Step 3: ``base`` trained on ``out/diagnosis`` (``d``, its ``diagnosis.json``) in ``out/run``;
+    returns ``(train's result, the dr it trained on, why the diagnosis was not used or None)``.
+    ``warm_start``: from the policy of ``run_dir`` (seed ``run_seed`` for a one-seed ``base``, else
+    each seed from its own), restarted at action std ``warm_std`` where that is set
+    (``LoopConfig.warm_std``). ``fallback``: the randomisation to train on when the diagnosis is
+    ``unusable`` (``LoopConfig.fallback``)."""
+    import warnings
+
+    from sim2real.algos import from_diagnosis
+    from sim2real.envs import make
+    from sim2real.training.driver import train
+
+    env = make(base.env, **dict(base.env_options))
     why = unusable(d)
     dr = dataclasses.replace(base.dr, from_diagnosis=os.path.join(out, "diagnosis"))
     if why and fallback is not None and fallback.params:
@@ -166,7 +194,7 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
                       stacklevel=2)
     cfg = dataclasses.replace(base, name="run", out_dir=out, resume=False, overwrite=False, progress=progress, dr=dr)
     if dr.from_diagnosis:
-        need = from_diagnosis.delay_line(dr.from_diagnosis, env, dr.diagnosis_k)
+        need = from_diagnosis.delay_line(dr.from_diagnosis, env, dr.diagnosis_k, dr.diagnosis_box)
         if need > env.config.max_delay:
             print(f"loop: the diagnosed delay's box reaches {need} control steps, beyond env '{base.env}''s "
                   f"delay line of {env.config.max_delay}: trained with env_options.max_delay={need}")
@@ -175,10 +203,4 @@ def iteration(run_dir: str, base: TrainConfig, target: str, out: str, episodes: 
         cfg = dataclasses.replace(cfg, algo_options={**cfg.algo_options, "warm_start": os.path.abspath(run_dir),
                                                      "warm_start_seed": run_seed if base.num_seeds == 1 else -1,
                                                      **({"warm_std": warm_std} if warm_std else {})})
-    res = train(cfg)
-    return {"recordings": paths, "real_return": what["mean_return"], "run": res["run_dir"],
-            "trained_on": "diagnosis" if dr.from_diagnosis else "fallback", "why": why or "",
-            "diagnosis": {"answer": d["answer"],
-                          "selected": [{"effect": s["effect"], "target": s["target"], "params": s["params"]}
-                                       for s in d["selected"]],
-                          "fitted_params": d["fitted_params"], "heldout_nrmse": [d["fit"]["before"], d["fit"]["after"]]}}
+    return train(cfg), dr, why

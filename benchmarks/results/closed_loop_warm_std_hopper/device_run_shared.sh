@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# The hopper's fine-tuned loop with the restart, every method starting from ONE nominal training
+# (device_run.sh trained it again in every process: five GPU processes, each with its own nominal
+# policies, and two loop seeds cut by the call's limit). Two calls on one NVIDIA H200, run from the
+# repo root with run(carry=[".whlmin", ".hopper_nominal"]):
+#   PHASE=1: trains the 3-seed nominal chain alone, scores it, then fine-tunes the oracle
+#            (oracle_ft) and the wide box (udr_wide_ft) from it, two processes; the nominal run
+#            folder comes back in $OUT/nominal.tgz (unpack it into .hopper_nominal/ for PHASE=2).
+#   PHASE=2: the loop (diag_dr_1, fine-tuned) for seeds 0, 1, 2, one process each, from that folder.
+# Settings as device_run.sh (closed_loop_until_end's fifth call with loop_warm_start and
+# warm_std=0.6065): the real budget's 3 episodes logged past the fall, an 8-step delay line,
+# the span box, the shared-lag candidate motor_lag_all.
+set -u
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whlmin/*.whl || exit
+export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
+COMMON="env=hopper seeds=3 total_steps=30000000 loop_warm_start=true record_until_end=true warm_std=0.6065"
+SET="config_set=env_options.max_delay=8;dr.diagnosis_box=span"
+DIAG="diagnose_set=effects=[none,coulomb_friction,viscous_damping,joint_stiffness,sensor_offset,mass_offset,action_delay,motor_lag,actuator_saturation,backlash,motor_lag_all]"
+DEV="device=NVIDIA H200 (one GPU)"
+LIMIT=${LIMIT:-570}
+T0=$(date +%s)
+mkdir -p /tmp/res/logs
+if [ "${PHASE:-1}" = 1 ]; then
+  timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=nominal out=/tmp/res/nominal \
+    work=/tmp/cl_nom "$DEV" > /tmp/res/logs/nominal.txt 2>&1
+  NOM=/tmp/cl_nom/hopper/nominal
+  LEFT=$(( LIMIT - ($(date +%s) - T0) ))
+  for m in oracle_ft udr_wide_ft; do
+    timeout $LEFT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=$m nominal=$NOM out=/tmp/res/$m \
+      work=/tmp/cl_$m "$DEV" > /tmp/res/logs/$m.txt 2>&1 &
+  done
+  wait
+  # the policy and its config (what nominal= and a warm start read), not the checkpoints (over 16 MiB)
+  tar czf $OUT/nominal.tgz --exclude=nominal/checkpoints -C /tmp/cl_nom/hopper nominal
+else
+  NOM=$PWD/.hopper_nominal/nominal
+  [ -d /tmp/cl_nom/hopper/nominal ] && NOM=/tmp/cl_nom/hopper/nominal  # the same machine, still warm
+  ls $NOM/policy.msgpack || exit 1
+  for s in 0 1 2; do
+    timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" "$DIAG" methods=diag_dr_1 only_seeds=$s \
+      nominal=$NOM out=/tmp/res/s$s work=/tmp/cl_s$s "$DEV" > /tmp/res/logs/seed$s.txt 2>&1 &
+  done
+  wait
+  for s in 0 1 2; do
+    mkdir -p /tmp/res/s$s/diag
+    cp /tmp/cl_s$s/hopper/loop_$s/iter_1/diagnosis/diagnosis.json /tmp/res/s$s/diag/ 2>/dev/null
+    cp /tmp/cl_s$s/hopper/loop_$s/iter_1/recordings/record.json /tmp/res/s$s/diag/ 2>/dev/null
+  done
+fi
+for f in /tmp/res/logs/*.txt; do echo "== $f"; grep -v "^WARNING\|^W0000\|^I0000" $f | grep -v "^$" | tail -6; done
+echo "phase ${PHASE:-1}: $(( $(date +%s) - T0 )) s"; nvidia-smi --query-gpu=name --format=csv,noheader
+tar czf $OUT/hopper_phase${PHASE:-1}.tgz -C /tmp/res .
