@@ -11,7 +11,7 @@
 # warm_std=0.6065): the real budget's 3 episodes logged past the fall, an 8-step delay line,
 # the span box, the shared-lag candidate motor_lag_all.
 set -u
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whlmin/*.whl || exit
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site ${WHL:-.whlmin}/*.whl || exit
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
 COMMON="env=hopper seeds=3 total_steps=30000000 loop_warm_start=true record_until_end=true warm_std=0.6065"
 SET="config_set=env_options.max_delay=8;dr.diagnosis_box=span"
