@@ -12,6 +12,11 @@
 # the span box, the shared-lag candidate motor_lag_all.
 set -u
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site ${WHL:-.whlmin}/*.whl || exit
+if ! ls ${WHL:-.whlmin}/trimesh-*.whl > /dev/null 2>&1; then
+  # no trimesh wheel carried (the working tree with it was over the device's 64 MiB): MJX imports
+  # it at the top of mesh.py but uses it only for mesh geoms, which the hopper has none of
+  mkdir -p /tmp/site/trimesh && printf 'class Trimesh:\n    def __init__(self, *a, **k):\n        raise ImportError("trimesh: a stand-in, not installed")\n' > /tmp/site/trimesh/__init__.py
+fi
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
 COMMON="env=hopper seeds=3 total_steps=30000000 loop_warm_start=true record_until_end=true warm_std=0.6065"
 SET="config_set=env_options.max_delay=8;dr.diagnosis_box=span"
@@ -32,6 +37,16 @@ if [ "${PHASE:-1}" = 1 ]; then
   wait
   # the policy and its config (what nominal= and a warm start read), not the checkpoints (over 16 MiB)
   tar czf $OUT/nominal.tgz --exclude=nominal/checkpoints -C /tmp/cl_nom/hopper nominal
+elif [ "$PHASE" = boxes ]; then
+  # the loop's retraining on two boxes around the same diagnoses (boxes.py part=diagnose, run on the
+  # 2-core CPU from the nominal.tgz of PHASE=1, copied to .hopper_nominal/diag): six processes
+  mkdir -p /tmp/res/boxes && cp -r .hopper_nominal/diag/* /tmp/res/boxes/
+  for s in 0 1 2; do for b in ${BOXES:-centred span}; do
+    timeout $LIMIT python3 benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain box=$b seed=$s \
+      nominal=.hopper_nominal/nominal out=/tmp/res/boxes > /tmp/res/logs/retrain_${s}_$b.txt 2>&1 &
+  done; done
+  wait
+  rm -rf /tmp/res/boxes/*/run/checkpoints /tmp/res/boxes/*_*/run/checkpoints
 else
   NOM=$PWD/.hopper_nominal/nominal
   [ -d /tmp/cl_nom/hopper/nominal ] && NOM=/tmp/cl_nom/hopper/nominal  # the same machine, still warm

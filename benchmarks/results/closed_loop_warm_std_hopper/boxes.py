@@ -1,0 +1,123 @@
+"""The hopper's fine-tuned loop on two boxes around the same diagnoses (span and centred), with
+the loop's own pieces (``loop.diagnose``, ``loop.retrain``) split over two machines: the
+diagnoses on the 2-core CPU, the retraining on one NVIDIA H200 (device time is short).
+
+    # on the GPU (device_run_shared.sh PHASE=1): nominal, oracle_ft and udr_wide_ft; nominal.tgz back
+    python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=diagnose nominal=DIR out=DIR
+    python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain nominal=DIR out=DIR box=centred seed=0
+    python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=summary out=DIR
+
+Settings as ``closed_loop.py``'s hopper calls of ``device_run_shared.sh`` (the same config, the
+real budget's 3 episodes of each seed's nominal policy logged past the fall, the shared-lag
+candidate, fine-tuned with ``warm_std=0.6065``; 64 evaluation episodes on the real plant).
+``part=retrain`` reads ``out/seed<s>/diagnosis`` and writes ``out/seed<s>_<box>/`` with
+``score.json``. A diagnosis' ``model`` is the env's MJCF on the machine that diagnosed: it is
+pointed at this machine's copy of the same file (``check_same_model`` still compares them).
+"""
+import dataclasses
+import json
+import os
+import sys
+
+import yaml
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.abspath(os.path.join(HERE, "..", "..", ".."))
+sys.path.insert(0, ROOT)
+sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+
+import closed_loop  # noqa: E402
+
+SET = ["env_options.max_delay=8", "num_seeds=1"]
+DIAG = ["effects=[none,coulomb_friction,viscous_damping,joint_stiffness,sensor_offset,mass_offset,action_delay,"
+        "motor_lag,actuator_saturation,backlash,motor_lag_all]"]
+
+
+@dataclasses.dataclass
+class Args:
+    part: str = "diagnose"
+    nominal: str = ""
+    out: str = ""
+    box: str = "centred"
+    seed: int = 0
+    seeds: str = "0,1,2"
+    total_steps: int = 30_000_000  # (less only to try the script; the nominal check then refuses)
+    episodes: int = 64
+
+
+def main(a: Args):
+    from sim2real.common import config as config_lib
+    from sim2real.envs.registry import env_class
+    from sim2real.tools import loop
+    from sim2real.training.driver import TrainConfig
+
+    if a.part == "summary":
+        return summary(a.out)
+    plant = os.path.join(ROOT, closed_loop.SETUPS["hopper"]["plant"])
+    base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, 'configs/hopper.yaml')}"] + SET
+                           + [f"dr.diagnosis_box={a.box}", f"total_steps={a.total_steps}"])
+    if a.total_steps == Args.total_steps:
+        closed_loop._earlier_nominal(a.nominal, base, 3)
+    if a.part == "diagnose":
+        for s in [int(x) for x in a.seeds.split(",")]:
+            _, what, d = loop.diagnose(a.nominal, base, plant, os.path.join(a.out, f"seed{s}"), 3, seed=100 + s,
+                                       run_seed=s, noise=1e-3, deterministic=True, diagnose_options=DIAG,
+                                       until_end=True)
+            print(f"seed {s}: recorded return {what['mean_return']:.1f}; "
+                  + "; ".join(f"{x['effect']} {x['params']}" for x in d["selected"]), flush=True)
+        return
+    s = a.seed
+    out = os.path.join(a.out, f"seed{s}_{a.box}")
+    diag = os.path.join(out, "diagnosis")
+    os.makedirs(diag)
+    d = json.load(open(os.path.join(a.out, f"seed{s}", "diagnosis", "diagnosis.json")))
+    d["model"] = loop.env_model_path(env_class(base.env))
+    json.dump(d, open(os.path.join(diag, "diagnosis.json"), "w"))
+    res, dr, why = loop.retrain(a.nominal, dataclasses.replace(base, seed=s), out, d, run_seed=s, warm_start=True,
+                                fallback=closed_loop._wide(closed_loop.SETUPS["hopper"]), warm_std=0.6065)
+    score = closed_loop._scores(res["run_dir"], plant, a.episodes, 1)[0]
+    json.dump({"seed": s, "box": a.box, "return": score, "trained_on": "diagnosis" if dr.from_diagnosis else "fallback",
+               "why": why or "", "dr": yaml.safe_load(open(os.path.join(res["run_dir"], "config.yaml")))["dr"]},
+              open(os.path.join(out, "score.json"), "w"), indent=1)
+    print(f"seed {s} box {a.box}: {score:.1f}", flush=True)
+
+
+def summary(out: str) -> None:
+    """``out/results.csv`` and ``out/summary.md``: every column per seed (the PHASE=1 columns from
+    their ``results.csv``, copied into ``out/<method>/``), the loop's against each baseline paired
+    by seed (the same nominal chain)."""
+    import glob
+
+    import numpy as np
+
+    rows = {}
+    for m in ("nominal", "oracle_ft", "udr_wide_ft"):
+        for line in open(os.path.join(out, m, "results.csv")).read().split()[1:]:
+            method, seed, ret = line.split(",")
+            rows.setdefault(method, {})[int(seed)] = float(ret)
+    for f in sorted(glob.glob(os.path.join(out, "seed*_*", "score.json"))):
+        r = json.load(open(f))
+        rows.setdefault(f"loop_{r['box']}", {})[r["seed"]] = r["return"]
+    seeds = sorted(rows["nominal"])
+    with open(os.path.join(out, "results.csv"), "w") as f:
+        f.write("method,seed,return\n" + "".join(f"{m},{s},{v!r}\n" for m, by in rows.items() for s, v in sorted(by.items())))
+    lines = ["| method | " + " | ".join(f"seed {s}" for s in seeds) + " | mean |", "|---" * (len(seeds) + 2) + "|"]
+    for m, by in rows.items():
+        lines.append(f"| {m} | " + " | ".join(f"{by[s]:.1f}" for s in seeds) + f" | {np.mean(list(by.values())):.1f} |")
+    lines += ["", "| loop - method | mean difference | seeds ahead | paired t |", "|---|---|---|---|"]
+    for loop_m in [m for m in rows if m.startswith("loop_")]:
+        for m in [m for m in rows if m != loop_m]:
+            d = np.array([rows[loop_m][s] - rows[m][s] for s in seeds])
+            t = d.mean() / (d.std(ddof=1) / np.sqrt(len(d))) if d.std(ddof=1) > 0 else float("nan")
+            lines.append(f"| {loop_m} - {m} | {d.mean():+.1f} | {(d > 0).sum()} of {len(d)} | {t:+.2f} |")
+    oracle = np.mean(list(rows["oracle_ft"].values()))
+    lines += [""] + [f"{m}: {np.mean(list(rows[m].values())) / oracle:.0%} of the fine-tuned oracle's mean return"
+                     for m in rows if m.startswith("loop_") or m == "udr_wide_ft"]
+    open(os.path.join(out, "summary.md"), "w").write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    from sim2real.common import config as config_lib
+
+    main(config_lib.load(Args, sys.argv[1:]))
