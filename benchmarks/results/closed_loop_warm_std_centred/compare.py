@@ -1,0 +1,74 @@
+"""The loop on the centred box against the columns run earlier on the same chains (the same
+nominal policies to the digit, reused with ``closed_loop.py nominal=``): prints and writes
+``summary.md`` with ``closed_loop.paired_lines``. The span box's loops are renamed ``span_1`` and
+``span_2`` so that they count as other methods.
+
+    python benchmarks/results/closed_loop_warm_std_centred/compare.py
+"""
+import csv
+import os
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+RES = os.path.dirname(HERE)
+sys.path.insert(0, os.path.dirname(RES))
+
+from closed_loop import paired_lines  # noqa: E402
+
+# this folder's run -> (earlier results.csv, the methods taken from it, renamed where a loop)
+SETS = {
+    "pendulum": [("closed_loop_warm_std_span/pendulum_2core", {"nominal": "nominal", "diag_dr_1": "span_1",
+                                                               "diag_dr_2": "span_2"}),
+                 ("closed_loop_warm_std/pendulum", {"oracle_ft": "oracle_ft", "udr_blind_ft": "udr_blind_ft"}),
+                 ("closed_loop_blind/pendulum", {"simopt": "simopt"})],
+    "cartpole": [("closed_loop_warm_std_span/cartpole", {"nominal": "nominal", "diag_dr_1": "span_1",
+                                                         "diag_dr_2": "span_2", "udr_blind_ft": "udr_blind_ft"}),
+                 ("closed_loop_warm_std/cartpole", {"oracle_ft": "oracle_ft"}),
+                 ("closed_loop_blind/cartpole", {"simopt": "simopt"})],
+    "cartpole_seed1": [("closed_loop_warm_std_span/cartpole_seed1", {"nominal": "nominal", "diag_dr_1": "span_1",
+                                                                     "diag_dr_2": "span_2",
+                                                                     "udr_blind_ft": "udr_blind_ft",
+                                                                     "simopt": "simopt"})],
+}
+
+
+def rows_of(path, rename=None):
+    with open(os.path.join(path, "results.csv")) as f:
+        return [dict(r, method=rename[r["method"]]) if rename else r for r in csv.DictReader(f)
+                if rename is None or r["method"] in rename]
+
+
+def main():
+    lines, both = [], {}
+    for name, earlier in SETS.items():
+        run = os.path.join(HERE, name, name.split("_")[0])
+        if not os.path.exists(os.path.join(run, "results.csv")):
+            continue
+        rows = rows_of(run) + [r for path, ren in earlier for r in rows_of(os.path.join(RES, path), ren)]
+        means = {}
+        for r in rows:
+            means.setdefault(r["method"], []).append(float(r["return"]))
+        lines += [f"## {name}", "", "| method | mean [min, max] |", "|---|---|"]
+        lines += [f"| {m} | {np.mean(v):.1f} [{min(v):.1f}, {max(v):.1f}] |" for m, v in means.items()]
+        lines += paired_lines(rows) + [""]
+        if name.startswith("cartpole"):
+            for r in rows:
+                both.setdefault(r["method"], []).append((name, r["seed"], float(r["return"])))
+    if {"cartpole", "cartpole_seed1"} <= set(SETS) and both:
+        sets = list(SETS)  # a chain is (its set, its seed): numbered 100 * set + seed for the pairing
+        rows = [{"method": m, "seed": 100 * sets.index(name) + int(seed), "return": v}
+                for m, vs in both.items() for name, seed, v in vs
+                if m != "oracle_ft"]  # (oracle_ft was run on the first five chains only)
+        lines += ["## cartpole, both sets of five chains (ten)", "", "| method | mean |", "|---|---|"]
+        lines += [f"| {m} | {np.mean([x[2] for x in vs]):.1f} |" for m, vs in both.items() if m != "oracle_ft"]
+        lines += paired_lines(rows) + [""]
+    text = "\n".join(lines)
+    print(text)
+    with open(os.path.join(HERE, "summary.md"), "w") as f:
+        f.write(text)
+
+
+if __name__ == "__main__":
+    main()
