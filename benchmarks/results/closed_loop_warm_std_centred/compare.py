@@ -27,6 +27,7 @@ SETS = {
                                                          "diag_dr_2": "span_2", "udr_blind_ft": "udr_blind_ft"}),
                  ("closed_loop_warm_std/cartpole", {"oracle_ft": "oracle_ft"}),
                  ("closed_loop_blind/cartpole", {"simopt": "simopt"})],
+    "pendulum_seed1": [],  # (every column run in that call: nominal, oracle_ft, udr_blind_ft, simopt)
     "cartpole_seed1": [("closed_loop_warm_std_span/cartpole_seed1", {"nominal": "nominal", "diag_dr_1": "span_1",
                                                                      "diag_dr_2": "span_2",
                                                                      "udr_blind_ft": "udr_blind_ft",
@@ -41,28 +42,32 @@ def rows_of(path, rename=None):
 
 
 def main():
-    lines, both = [], {}
+    lines, by_set = [], {}
     for name, earlier in SETS.items():
         run = os.path.join(HERE, name, name.split("_")[0])
         if not os.path.exists(os.path.join(run, "results.csv")):
             continue
         rows = rows_of(run) + [r for path, ren in earlier for r in rows_of(os.path.join(RES, path), ren)]
+        by_set[name] = rows
         means = {}
         for r in rows:
             means.setdefault(r["method"], []).append(float(r["return"]))
         lines += [f"## {name}", "", "| method | mean [min, max] |", "|---|---|"]
         lines += [f"| {m} | {np.mean(v):.1f} [{min(v):.1f}, {max(v):.1f}] |" for m, v in means.items()]
         lines += paired_lines(rows) + [""]
-        if name.startswith("cartpole"):
-            for r in rows:
-                both.setdefault(r["method"], []).append((name, r["seed"], float(r["return"])))
-    if {"cartpole", "cartpole_seed1"} <= set(SETS) and both:
-        sets = list(SETS)  # a chain is (its set, its seed): numbered 100 * set + seed for the pairing
-        rows = [{"method": m, "seed": 100 * sets.index(name) + int(seed), "return": v}
-                for m, vs in both.items() for name, seed, v in vs
-                if m != "oracle_ft"]  # (oracle_ft was run on the first five chains only)
-        lines += ["## cartpole, both sets of five chains (ten)", "", "| method | mean |", "|---|---|"]
-        lines += [f"| {m} | {np.mean([x[2] for x in vs]):.1f} |" for m, vs in both.items() if m != "oracle_ft"]
+    for env in ("pendulum", "cartpole"):  # both sets of five chains, the methods both have
+        sets = [n for n in SETS if n.split("_")[0] == env]
+        if not all(n in by_set for n in sets):
+            continue
+        common = set.intersection(*({r["method"] for r in by_set[n]} for n in sets))
+        # a chain is (its set, its seed): numbered 100 * set + seed for the pairing
+        rows = [dict(r, seed=100 * k + int(r["seed"])) for k, n in enumerate(sets) for r in by_set[n]
+                if r["method"] in common]
+        means = {}
+        for r in rows:
+            means.setdefault(r["method"], []).append(float(r["return"]))
+        lines += [f"## {env}, both sets of five chains (ten)", "", "| method | mean |", "|---|---|"]
+        lines += [f"| {m} | {np.mean(v):.1f} |" for m, v in means.items()]
         lines += paired_lines(rows) + [""]
     text = "\n".join(lines)
     print(text)
