@@ -430,17 +430,18 @@ def _earlier(args, methods, per_seed):
     return rows, diagnoses, seconds
 
 
-def paired_lines(rows: list[dict]) -> list[str]:
+def paired_lines(rows: list[dict], loops: tuple[str, ...] = ("diag_dr_1", "diag_dr_2")) -> list[str]:
     """The loop against every other method, seed by seed (the seeds both have): mean difference of
     return, seeds ahead, paired t. Seed ``s`` is one chain for every method, so the pairing takes
-    out the chain's own luck (the nominal policy the loop starts from)."""
+    out the chain's own luck (the nominal policy the loop starts from). ``loops``: the loop's
+    methods, each against the others and the ones before it in this order."""
     per = {}
     for r in rows:
         per.setdefault(r["method"], {})[int(r["seed"])] = float(r["return"])
     out = []
-    for a in ("diag_dr_1", "diag_dr_2"):
+    for a in loops:
         for b in per:
-            if a not in per or b == a or b.startswith("diag_dr") and b > a:
+            if a not in per or b == a or b in loops and loops.index(b) > loops.index(a):
                 continue
             seeds = sorted(set(per[a]) & set(per[b]))
             if len(seeds) < 2:

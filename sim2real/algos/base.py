@@ -10,6 +10,8 @@ import numpy as np
 from sim2real.envs.base import Env
 from sim2real.physics.params import Subspace, bounds_text
 
+DiagnosisBox = Literal["std", "span", "centred"]  # how a diagnosis' box is drawn (``from_diagnosis.box``)
+
 
 @dataclasses.dataclass(frozen=True)
 class DRConfig:
@@ -35,7 +37,7 @@ class DRConfig:
     fixed: dict[str, float] = dataclasses.field(default_factory=dict)
     from_diagnosis: str = ""
     diagnosis_k: float = 2.0
-    diagnosis_box: Literal["std", "span", "centred"] = "std"
+    diagnosis_box: DiagnosisBox = "std"
 
 
 class DRSpace:

@@ -26,12 +26,13 @@ import dataclasses
 import json
 import math
 import os
+import typing
 import warnings
 
 import mujoco
 import numpy as np
 
-from sim2real.algos.base import DRConfig
+from sim2real.algos.base import DiagnosisBox, DRConfig
 from sim2real.common.config import ConfigError
 from sim2real.envs.base import Env
 from sim2real.physics import catalog
@@ -173,7 +174,7 @@ def _default_in_diagnosis(d: dict, name: str) -> float:
     return float(r["nominal"]) if r else 0.0
 
 
-BOXES = ("std", "span", "centred")
+BOXES = typing.get_args(DiagnosisBox)
 
 
 def box(value: float, sd: float, default: float, k: float, kind: str) -> tuple[float, float]:

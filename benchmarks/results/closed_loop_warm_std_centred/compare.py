@@ -41,6 +41,19 @@ def rows_of(path, rename=None):
                 if rename is None or r["method"] in rename]
 
 
+def section(title, rows, spread):
+    """A summary section: each method's mean (with min and max where ``spread``), then the loop
+    against every other method paired by seed."""
+    means = {}
+    for r in rows:
+        means.setdefault(r["method"], []).append(float(r["return"]))
+    head = "| method | mean [min, max] |" if spread else "| method | mean |"
+    return ([f"## {title}", "", head, "|---|---|"]
+            + [f"| {m} | {np.mean(v):.1f}" + (f" [{min(v):.1f}, {max(v):.1f}]" if spread else "") + " |"
+               for m, v in means.items()]
+            + paired_lines(rows) + [""])
+
+
 def main():
     lines, by_set = [], {}
     for name, earlier in SETS.items():
@@ -49,12 +62,7 @@ def main():
             continue
         rows = rows_of(run) + [r for path, ren in earlier for r in rows_of(os.path.join(RES, path), ren)]
         by_set[name] = rows
-        means = {}
-        for r in rows:
-            means.setdefault(r["method"], []).append(float(r["return"]))
-        lines += [f"## {name}", "", "| method | mean [min, max] |", "|---|---|"]
-        lines += [f"| {m} | {np.mean(v):.1f} [{min(v):.1f}, {max(v):.1f}] |" for m, v in means.items()]
-        lines += paired_lines(rows) + [""]
+        lines += section(name, rows, spread=True)
     for env in ("pendulum", "cartpole"):  # both sets of five chains, the methods both have
         sets = [n for n in SETS if n.split("_")[0] == env]
         if not all(n in by_set for n in sets):
@@ -63,12 +71,7 @@ def main():
         # a chain is (its set, its seed): numbered 100 * set + seed for the pairing
         rows = [dict(r, seed=100 * k + int(r["seed"])) for k, n in enumerate(sets) for r in by_set[n]
                 if r["method"] in common]
-        means = {}
-        for r in rows:
-            means.setdefault(r["method"], []).append(float(r["return"]))
-        lines += [f"## {env}, both sets of five chains (ten)", "", "| method | mean |", "|---|---|"]
-        lines += [f"| {m} | {np.mean(v):.1f} |" for m, v in means.items()]
-        lines += paired_lines(rows) + [""]
+        lines += section(f"{env}, both sets of five chains (ten)", rows, spread=False)
     text = "\n".join(lines)
     print(text)
     with open(os.path.join(HERE, "summary.md"), "w") as f:

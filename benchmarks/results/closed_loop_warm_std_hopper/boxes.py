@@ -104,12 +104,8 @@ def summary(out: str) -> None:
     lines = ["| method | " + " | ".join(f"seed {s}" for s in seeds) + " | mean |", "|---" * (len(seeds) + 2) + "|"]
     for m, by in rows.items():
         lines.append(f"| {m} | " + " | ".join(f"{by[s]:.1f}" for s in seeds) + f" | {np.mean(list(by.values())):.1f} |")
-    lines += ["", "| loop - method | mean difference | seeds ahead | paired t |", "|---|---|---|---|"]
-    for loop_m in [m for m in rows if m.startswith("loop_")]:
-        for m in [m for m in rows if m != loop_m]:
-            d = np.array([rows[loop_m][s] - rows[m][s] for s in seeds])
-            t = d.mean() / (d.std(ddof=1) / np.sqrt(len(d))) if d.std(ddof=1) > 0 else float("nan")
-            lines.append(f"| {loop_m} - {m} | {d.mean():+.1f} | {(d > 0).sum()} of {len(d)} | {t:+.2f} |")
+    lines += closed_loop.paired_lines([{"method": m, "seed": s, "return": v} for m, by in rows.items()
+                                       for s, v in by.items()], loops=("loop_span", "loop_centred"))
     oracle = np.mean(list(rows["oracle_ft"].values()))
     lines += [""] + [f"{m}: {np.mean(list(rows[m].values())) / oracle:.0%} of the fine-tuned oracle's mean return"
                      for m in rows if m.startswith("loop_") or m == "udr_wide_ft"]
