@@ -6,12 +6,17 @@ diagnoses on the 2-core CPU, the retraining on one NVIDIA H200 (device time is s
     python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=diagnose nominal=DIR out=DIR
     python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain nominal=DIR out=DIR box=centred seed=0
     python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=summary out=DIR
+    # the second loop (closed_loop.py's diag_dr_2): record loop 1's policy, diagnose, retrain from it
+    python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=diagnose iteration=2 box=centred nominal=DIR out=DIR
+    python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain iteration=2 box=centred nominal=DIR out=DIR seed=0
 
 Settings as ``closed_loop.py``'s hopper calls of ``device_run_shared.sh`` (the same config, the
 real budget's 3 episodes of each seed's nominal policy logged past the fall, the shared-lag
 candidate, fine-tuned with ``warm_std=0.6065``; 64 evaluation episodes on the real plant).
 ``part=retrain`` reads ``out/seed<s>/diagnosis`` and writes ``out/seed<s>_<box>/`` with
-``score.json``. A diagnosis' ``model`` is the env's MJCF on the machine that diagnosed: it is
+``score.json``. ``iteration=2`` is closed_loop's second loop: ``part=diagnose`` records the first
+loop's policy (``out/seed<s>_<box>/run``, initial states ``200 + s``) into ``out/seed<s>_<box>_diag2/``,
+``part=retrain`` fine-tunes that policy on this diagnosis into ``out/seed<s>_<box>_2/``. A diagnosis' ``model`` is the env's MJCF on the machine that diagnosed: it is
 pointed at this machine's copy of the same file (``check_same_model`` still compares them).
 """
 import dataclasses
@@ -41,6 +46,7 @@ class Args:
     box: str = "centred"
     seed: int = 0
     seeds: str = "0,1,2"
+    iteration: int = 1
     total_steps: int = 30_000_000  # (less only to try the script; the nominal check then refuses)
     episodes: int = 64
 
@@ -58,46 +64,61 @@ def main(a: Args):
                            + [f"dr.diagnosis_box={a.box}", f"total_steps={a.total_steps}"])
     if a.total_steps == Args.total_steps:
         closed_loop._earlier_nominal(a.nominal, base, 3)
+    if a.iteration not in (1, 2):
+        raise SystemExit(f"iteration={a.iteration}: 1 or 2")
     if a.part == "diagnose":
         for s in [int(x) for x in a.seeds.split(",")]:
-            _, what, d = loop.diagnose(a.nominal, base, plant, os.path.join(a.out, f"seed{s}"), 3, seed=100 + s,
-                                       run_seed=s, noise=1e-3, deterministic=True, diagnose_options=DIAG,
+            policy, run_seed, where = _source(a, s)
+            _, what, d = loop.diagnose(policy, base, plant, os.path.join(a.out, where), 3, seed=100 * a.iteration + s,
+                                       run_seed=run_seed, noise=1e-3, deterministic=True, diagnose_options=DIAG,
                                        until_end=True)
             print(f"seed {s}: recorded return {what['mean_return']:.1f}; "
                   + "; ".join(f"{x['effect']} {x['params']}" for x in d["selected"]), flush=True)
         return
     s = a.seed
-    out = os.path.join(a.out, f"seed{s}_{a.box}")
+    policy, run_seed, where = _source(a, s)
+    out = os.path.join(a.out, f"seed{s}_{a.box}" + ("_2" if a.iteration == 2 else ""))
     diag = os.path.join(out, "diagnosis")
     os.makedirs(diag)
-    d = json.load(open(os.path.join(a.out, f"seed{s}", "diagnosis", "diagnosis.json")))
+    d = json.load(open(os.path.join(a.out, where, "diagnosis", "diagnosis.json")))
     d["model"] = loop.env_model_path(env_class(base.env))
     json.dump(d, open(os.path.join(diag, "diagnosis.json"), "w"))
-    res, dr, why = loop.retrain(a.nominal, dataclasses.replace(base, seed=s), out, d, run_seed=s, warm_start=True,
+    res, dr, why = loop.retrain(policy, dataclasses.replace(base, seed=s), out, d, run_seed=run_seed, warm_start=True,
                                 fallback=closed_loop._wide(closed_loop.SETUPS["hopper"]), warm_std=0.6065)
     score = closed_loop._scores(res["run_dir"], plant, a.episodes, 1)[0]
-    json.dump({"seed": s, "box": a.box, "return": score, "trained_on": "diagnosis" if dr.from_diagnosis else "fallback",
+    json.dump({"seed": s, "box": a.box, "iteration": a.iteration, "return": score,
+               "trained_on": "diagnosis" if dr.from_diagnosis else "fallback",
                "why": why or "", "dr": yaml.safe_load(open(os.path.join(res["run_dir"], "config.yaml")))["dr"]},
               open(os.path.join(out, "score.json"), "w"), indent=1)
-    print(f"seed {s} box {a.box}: {score:.1f}", flush=True)
+    print(f"seed {s} box {a.box} iteration {a.iteration}: {score:.1f}", flush=True)
+
+
+def _source(a: Args, s: int) -> tuple[str, int, str]:
+    """Iteration ``a.iteration``'s recorded policy for seed ``s`` (its run folder and the seed in
+    it) and the folder under ``a.out`` its recordings and diagnosis go to."""
+    if a.iteration == 1:
+        return a.nominal, s, f"seed{s}"
+    return os.path.join(a.out, f"seed{s}_{a.box}", "run"), 0, f"seed{s}_{a.box}_diag2"
 
 
 def summary(out: str) -> None:
-    """``out/results.csv`` and ``out/summary.md``: every column per seed (the PHASE=1 columns from
-    their ``results.csv``, copied into ``out/<method>/``), the loop's against each baseline paired
+    """``out/results.csv`` and ``out/summary.md``: every column per seed (closed_loop.py's columns
+    from their ``results.csv``, copied into ``out/<method>/``), the loop's against each baseline paired
     by seed (the same nominal chain)."""
     import glob
 
     import numpy as np
 
     rows = {}
-    for m in ("nominal", "oracle_ft", "udr_wide_ft"):
+    for m in ("nominal", "oracle_ft", "udr_wide_ft", "simopt", "lsdr"):
+        if not os.path.exists(os.path.join(out, m, "results.csv")):
+            continue
         for line in open(os.path.join(out, m, "results.csv")).read().split()[1:]:
             method, seed, ret = line.split(",")
             rows.setdefault(method, {})[int(seed)] = float(ret)
     for f in sorted(glob.glob(os.path.join(out, "seed*_*", "score.json"))):
         r = json.load(open(f))
-        rows.setdefault(f"loop_{r['box']}", {})[r["seed"]] = r["return"]
+        rows.setdefault(f"loop_{r['box']}" + ("_2" if r.get("iteration", 1) == 2 else ""), {})[r["seed"]] = r["return"]
     seeds = sorted(rows["nominal"])
     with open(os.path.join(out, "results.csv"), "w") as f:
         f.write("method,seed,return\n" + "".join(f"{m},{s},{v!r}\n" for m, by in rows.items() for s, v in sorted(by.items())))
@@ -105,7 +126,7 @@ def summary(out: str) -> None:
     for m, by in rows.items():
         lines.append(f"| {m} | " + " | ".join(f"{by[s]:.1f}" for s in seeds) + f" | {np.mean(list(by.values())):.1f} |")
     lines += closed_loop.paired_lines([{"method": m, "seed": s, "return": v} for m, by in rows.items()
-                                       for s, v in by.items()], loops=("loop_span", "loop_centred"))
+                                       for s, v in by.items()], loops=tuple(m for m in ("loop_span", "loop_centred", "loop_centred_2") if m in rows))
     oracle = np.mean(list(rows["oracle_ft"].values()))
     lines += [""] + [f"{m}: {np.mean(list(rows[m].values())) / oracle:.0%} of the fine-tuned oracle's mean return"
                      for m in rows if m.startswith("loop_") or m == "udr_wide_ft"]

@@ -7,6 +7,7 @@
 #            (oracle_ft) and the wide box (udr_wide_ft) from it, two processes; the nominal run
 #            folder comes back in $OUT/nominal.tgz (unpack it into .hopper_nominal/ for PHASE=2).
 #   PHASE=2: the loop (diag_dr_1, fine-tuned) for seeds 0, 1, 2, one process each, from that folder.
+#   PHASE=boxes, more, loop2: boxes.py's retraining on the GPU (below; its docstring says the order).
 # Settings as device_run.sh (closed_loop_until_end's fifth call with loop_warm_start and
 # warm_std=0.6065): the real budget's 3 episodes logged past the fall, an 8-step delay line,
 # the span box, the shared-lag candidate motor_lag_all.
@@ -47,6 +48,31 @@ elif [ "$PHASE" = boxes ]; then
   done; done
   wait
   rm -rf /tmp/res/boxes/*/run/checkpoints /tmp/res/boxes/*_*/run/checkpoints
+elif [ "$PHASE" = more ]; then
+  # the first loop again on the centred box (PHASE=boxes kept no policy, and the second loop starts
+  # from it) and SimOpt from each seed's nominal recordings: six processes, .hopper_nominal as above
+  mkdir -p /tmp/res/two_loops && cp -r .hopper_nominal/diag/* /tmp/res/two_loops/
+  for s in 0 1 2; do
+    timeout $LIMIT python3 benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain box=centred seed=$s \
+      nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain_$s.txt 2>&1 &
+    timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=simopt only_seeds=$s \
+      nominal=.hopper_nominal/nominal out=/tmp/res/simopt_s$s work=/tmp/cl_so$s "$DEV" > /tmp/res/logs/simopt_$s.txt 2>&1 &
+  done
+  wait
+  rm -rf /tmp/res/two_loops/*/run/checkpoints
+elif [ "$PHASE" = loop2 ]; then
+  # the second loop's retraining from the first's policies on the diagnoses of their recordings
+  # (boxes.py part=diagnose iteration=2 on the 2-core CPU; .hopper_nominal/two_loops holds
+  # seed<s>_centred/run and seed<s>_centred_diag2/diagnosis), and LSDR from scratch (3 seeds)
+  cp -r .hopper_nominal/two_loops /tmp/res/two_loops
+  for s in 0 1 2; do
+    timeout $LIMIT python3 benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain iteration=2 \
+      box=centred seed=$s nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain2_$s.txt 2>&1 &
+  done
+  timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=lsdr out=/tmp/res/lsdr work=/tmp/cl_lsdr \
+    "$DEV" > /tmp/res/logs/lsdr.txt 2>&1 &
+  wait
+  rm -rf /tmp/res/two_loops/*/run/checkpoints
 else
   NOM=$PWD/.hopper_nominal/nominal
   [ -d /tmp/cl_nom/hopper/nominal ] && NOM=/tmp/cl_nom/hopper/nominal  # the same machine, still warm
