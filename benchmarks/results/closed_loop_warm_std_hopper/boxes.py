@@ -129,7 +129,7 @@ def summary(out: str) -> None:
                                        for s, v in by.items()], loops=tuple(m for m in ("loop_span", "loop_centred", "loop_centred_2") if m in rows))
     oracle = np.mean(list(rows["oracle_ft"].values()))
     lines += [""] + [f"{m}: {np.mean(list(rows[m].values())) / oracle:.0%} of the fine-tuned oracle's mean return"
-                     for m in rows if m.startswith("loop_") or m == "udr_wide_ft"]
+                     for m in rows if m not in ("nominal", "oracle_ft")]
     open(os.path.join(out, "summary.md"), "w").write("\n".join(lines) + "\n")
     print("\n".join(lines))
 
