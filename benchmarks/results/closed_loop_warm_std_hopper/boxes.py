@@ -47,6 +47,7 @@ class Args:
     seed: int = 0
     seeds: str = "0,1,2"
     iteration: int = 1
+    config_set: str = ""  # more training settings, ';'-separated (device_run_shared.sh's EXTRA_SET)
     total_steps: int = 30_000_000  # (less only to try the script; the nominal check then refuses)
     episodes: int = 64
 
@@ -60,7 +61,8 @@ def main(a: Args):
     if a.part == "summary":
         return summary(a.out)
     plant = os.path.join(ROOT, closed_loop.SETUPS["hopper"]["plant"])
-    base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, 'configs/hopper.yaml')}"] + SET
+    extra = [x for x in a.config_set.split(";") if x.strip()]
+    base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, 'configs/hopper.yaml')}"] + SET + extra
                            + [f"dr.diagnosis_box={a.box}", f"total_steps={a.total_steps}"])
     if a.total_steps == Args.total_steps:
         closed_loop._earlier_nominal(a.nominal, base, 3)

@@ -20,7 +20,8 @@ if ! ls ${WHL:-.whlmin}/trimesh-*.whl > /dev/null 2>&1; then
 fi
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
 COMMON="env=hopper seeds=3 total_steps=30000000 loop_warm_start=true record_until_end=true warm_std=0.6065"
-SET="config_set=env_options.max_delay=8;dr.diagnosis_box=span"
+# EXTRA_SET: more training settings (seed=1: other chains than seed 0's; boxes.py config_set=)
+SET="config_set=env_options.max_delay=8;dr.diagnosis_box=span${EXTRA_SET:+;$EXTRA_SET}"
 DIAG="diagnose_set=effects=[none,coulomb_friction,viscous_damping,joint_stiffness,sensor_offset,mass_offset,action_delay,motor_lag,actuator_saturation,backlash,motor_lag_all]"
 DEV="device=NVIDIA H200 (one GPU)"
 LIMIT=${LIMIT:-570}
@@ -35,6 +36,10 @@ if [ "${PHASE:-1}" = 1 ]; then
     timeout $LEFT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=$m nominal=$NOM out=/tmp/res/$m \
       work=/tmp/cl_$m "$DEV" > /tmp/res/logs/$m.txt 2>&1 &
   done
+  for s in ${SIMOPT:+0 1 2}; do  # SIMOPT=1: SimOpt from each seed's nominal recordings beside them
+    timeout $LEFT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=simopt only_seeds=$s nominal=$NOM \
+      out=/tmp/res/simopt_s$s work=/tmp/cl_so$s "$DEV" > /tmp/res/logs/simopt_$s.txt 2>&1 &
+  done
   wait
   # the policy and its config (what nominal= and a warm start read), not the checkpoints (over 16 MiB)
   tar czf $OUT/nominal.tgz --exclude=nominal/checkpoints -C /tmp/cl_nom/hopper nominal
@@ -44,7 +49,7 @@ elif [ "$PHASE" = boxes ]; then
   mkdir -p /tmp/res/boxes && cp -r .hopper_nominal/diag/* /tmp/res/boxes/
   for s in 0 1 2; do for b in ${BOXES:-centred span}; do
     timeout $LIMIT python3 benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain box=$b seed=$s \
-      nominal=.hopper_nominal/nominal out=/tmp/res/boxes > /tmp/res/logs/retrain_${s}_$b.txt 2>&1 &
+      "config_set=${EXTRA_SET:-}" nominal=.hopper_nominal/nominal out=/tmp/res/boxes > /tmp/res/logs/retrain_${s}_$b.txt 2>&1 &
   done; done
   wait
   rm -rf /tmp/res/boxes/*/run/checkpoints /tmp/res/boxes/*_*/run/checkpoints
