@@ -6,6 +6,8 @@ diagnoses on the 2-core CPU, the retraining on one NVIDIA H200 (device time is s
     python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=diagnose nominal=DIR out=DIR
     python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain nominal=DIR out=DIR box=centred seed=0
     python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=summary out=DIR
+    # several summaries' chains as one table (each out's seed s as chain 10 k + s)
+    python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=pooled outs=DIR,DIR
     # the second loop (closed_loop.py's diag_dr_2): record loop 1's policy, diagnose, retrain from it
     python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=diagnose iteration=2 box=centred nominal=DIR out=DIR
     python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain iteration=2 box=centred nominal=DIR out=DIR seed=0
@@ -46,6 +48,7 @@ class Args:
     box: str = "centred"
     seed: int = 0
     seeds: str = "0,1,2"
+    outs: str = ""  # part=pooled: the summaries' folders, comma-separated
     iteration: int = 1
     config_set: str = ""  # more training settings, ';'-separated (device_run_shared.sh's EXTRA_SET)
     total_steps: int = 30_000_000  # (less only to try the script; the nominal check then refuses)
@@ -60,6 +63,8 @@ def main(a: Args):
 
     if a.part == "summary":
         return summary(a.out)
+    if a.part == "pooled":
+        return pooled([x for x in a.outs.split(",") if x])
     plant = os.path.join(ROOT, closed_loop.SETUPS["hopper"]["plant"])
     extra = [x for x in a.config_set.split(";") if x.strip()]
     base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, 'configs/hopper.yaml')}"] + SET + extra
@@ -134,6 +139,29 @@ def summary(out: str) -> None:
                      for m in rows if m not in ("nominal", "oracle_ft")]
     open(os.path.join(out, "summary.md"), "w").write("\n".join(lines) + "\n")
     print("\n".join(lines))
+
+
+def pooled(outs: list[str]) -> None:
+    """The chains of several ``part=summary`` folders (other nominal trainings: seed ``s`` of the
+    ``k``-th folder is chain ``10 k + s``) as one table: each method's mean over the chains it ran
+    on, and the loop against the others paired by chain. Printed only."""
+    import numpy as np
+
+    rows = []
+    for k, out in enumerate(outs):
+        for line in open(os.path.join(out, "results.csv")).read().split()[1:]:
+            method, seed, ret = line.split(",")
+            rows.append({"method": method, "seed": 10 * k + int(seed), "return": float(ret)})
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    oracle = {r["seed"]: r["return"] for r in rows if r["method"] == "oracle_ft"}
+    print(f"{len(outs)} tables: " + ", ".join(outs) + "\n\n| method | chains | mean | min | max "
+          "| of the fine-tuned oracle's mean on those chains |\n|---|---|---|---|---|---|")
+    for m in methods:
+        by = {r["seed"]: r["return"] for r in rows if r["method"] == m}
+        v = list(by.values())
+        print(f"| {m} | {len(v)} | {np.mean(v):.1f} | {min(v):.1f} | {max(v):.1f} "
+              f"| {np.mean(v) / np.mean([oracle[c] for c in by]):.0%} |")
+    print("\n".join(closed_loop.paired_lines(rows, loops=tuple(m for m in methods if m.startswith("loop_")))))
 
 
 if __name__ == "__main__":
