@@ -9,17 +9,19 @@ diagnoses on the 2-core CPU, the retraining on one NVIDIA H200 (device time is s
     # several summaries' chains as one table (each out's seed s as chain 10 k + s)
     python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=pooled outs=DIR,DIR
     # the second loop (closed_loop.py's diag_dr_2): record loop 1's policy, diagnose, retrain from it
-    python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=diagnose iteration=2 box=centred nominal=DIR out=DIR
-    python benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain iteration=2 box=centred nominal=DIR out=DIR seed=0
+    python .../boxes.py part=diagnose iteration=2 box=centred nominal=DIR out=DIR
+    python .../boxes.py part=retrain iteration=2 box=centred nominal=DIR out=DIR seed=0
 
 Settings as ``closed_loop.py``'s hopper calls of ``device_run_shared.sh`` (the same config, the
 real budget's 3 episodes of each seed's nominal policy logged past the fall, the shared-lag
 candidate, fine-tuned with ``warm_std=0.6065``; 64 evaluation episodes on the real plant).
 ``part=retrain`` reads ``out/seed<s>/diagnosis`` and writes ``out/seed<s>_<box>/`` with
-``score.json``. ``iteration=2`` is closed_loop's second loop: ``part=diagnose`` records the first
-loop's policy (``out/seed<s>_<box>/run``, initial states ``200 + s``) into ``out/seed<s>_<box>_diag2/``,
-``part=retrain`` fine-tunes that policy on this diagnosis into ``out/seed<s>_<box>_2/``. A diagnosis' ``model`` is the env's MJCF on the machine that diagnosed: it is
-pointed at this machine's copy of the same file (``check_same_model`` still compares them).
+``score.json``. ``iteration=2`` is closed_loop's second loop: ``part=diagnose`` records the
+first loop's policy (``out/seed<s>_<box>/run``, initial states ``200 + s``) into
+``out/seed<s>_<box>_diag2/``, ``part=retrain`` fine-tunes that policy on this diagnosis into
+``out/seed<s>_<box>_2/``. ``config_set``: more training settings (``seed=1`` for other chains).
+A diagnosis' ``model`` is the env's MJCF on the machine that diagnosed: it is pointed at this
+machine's copy of the same file (``check_same_model`` still compares them).
 """
 import dataclasses
 import json
@@ -125,15 +127,17 @@ def summary(out: str) -> None:
             rows.setdefault(method, {})[int(seed)] = float(ret)
     for f in sorted(glob.glob(os.path.join(out, "seed*_*", "score.json"))):
         r = json.load(open(f))
-        rows.setdefault(f"loop_{r['box']}" + ("_2" if r.get("iteration", 1) == 2 else ""), {})[r["seed"]] = r["return"]
+        name = f"loop_{r['box']}" + ("_2" if r.get("iteration", 1) == 2 else "")
+        rows.setdefault(name, {})[r["seed"]] = r["return"]
     seeds = sorted(rows["nominal"])
     with open(os.path.join(out, "results.csv"), "w") as f:
         f.write("method,seed,return\n" + "".join(f"{m},{s},{v!r}\n" for m, by in rows.items() for s, v in sorted(by.items())))
     lines = ["| method | " + " | ".join(f"seed {s}" for s in seeds) + " | mean |", "|---" * (len(seeds) + 2) + "|"]
     for m, by in rows.items():
         lines.append(f"| {m} | " + " | ".join(f"{by[s]:.1f}" for s in seeds) + f" | {np.mean(list(by.values())):.1f} |")
+    loops = tuple(m for m in ("loop_span", "loop_centred", "loop_centred_2") if m in rows)
     lines += closed_loop.paired_lines([{"method": m, "seed": s, "return": v} for m, by in rows.items()
-                                       for s, v in by.items()], loops=tuple(m for m in ("loop_span", "loop_centred", "loop_centred_2") if m in rows))
+                                       for s, v in by.items()], loops=loops)
     oracle = np.mean(list(rows["oracle_ft"].values()))
     lines += [""] + [f"{m}: {np.mean(list(rows[m].values())) / oracle:.0%} of the fine-tuned oracle's mean return"
                      for m in rows if m not in ("nominal", "oracle_ft")]
@@ -154,8 +158,9 @@ def pooled(outs: list[str]) -> None:
             rows.append({"method": method, "seed": 10 * k + int(seed), "return": float(ret)})
     methods = list(dict.fromkeys(r["method"] for r in rows))
     oracle = {r["seed"]: r["return"] for r in rows if r["method"] == "oracle_ft"}
-    print(f"{len(outs)} tables: " + ", ".join(outs) + "\n\n| method | chains | mean | min | max "
-          "| of the fine-tuned oracle's mean on those chains |\n|---|---|---|---|---|---|")
+    print(f"{len(outs)} tables: " + ", ".join(outs))
+    head = "method | chains | mean | min | max | of the fine-tuned oracle's mean on those chains"
+    print(f"\n| {head} |\n" + "|---" * 6 + "|")
     for m in methods:
         by = {r["seed"]: r["return"] for r in rows if r["method"] == m}
         v = list(by.values())
