@@ -621,6 +621,35 @@ def test_backward_check_drops_an_effect_a_later_one_made_redundant():
     assert [c.label for c in M.effects] == ["viscous_damping@j", "motor_lag@j"] and path is steps
 
 
+def test_backward_check_keeps_an_effect_that_carries_the_fit():
+    """``SelectConfig.prune_fit``: a shared lag (A) and one motor's lag (B) were named; B alone
+    predicts the validation segments 2.8x better than both (they saw less than the fit: the
+    hopper's tails after its fall) but fits the fitted segments 96x worse. The validation alone
+    would drop A and keep B; A carries the fit, so it stays (with a note) and B goes."""
+    import dataclasses
+
+    from sim2real.sysid.candidates import Candidate
+
+    A = Candidate("motor_lag_all", "", ("motor_lag_all",), ((0.01,),), (0.01,), ((0.0, 0.2),))
+    B = Candidate("motor_lag", "thigh", ("motor_lag:thigh",), ((0.01,),), (0.01,), ((0.0, 0.2),))
+    rng = np.random.default_rng(1)
+    tails = 100 + 10 * rng.uniform(0, 1, 10)
+    fits = {frozenset(): (200000.0, tails * 20),
+            frozenset({"motor_lag_all"}): (970.0, tails * 2.8 * 1.001),
+            frozenset({"motor_lag_all", "motor_lag@thigh"}): (1000.0, tails * 2.8),
+            frozenset({"motor_lag@thigh"}): (96000.0, tails)}
+    sel, fit = _selector(fits)
+    steps = [fit([], 0, 0), fit([A], 0, 0), fit([A, B], 0, 0)]
+    M, path = sel._prune(steps[-1], steps)
+    assert [c.label for c in M.effects] == ["motor_lag_all"]
+    assert any("motor_lag_all kept although" in n and "96x higher" in n for n in sel.pruned)
+    assert any("motor_lag@thigh was dropped" in n for n in sel.pruned)
+    sel, fit = _selector(fits)
+    sel.cfg = dataclasses.replace(sel.cfg, prune_fit=0.0)     # the validation alone: A goes
+    M, path = sel._prune(steps[-1], steps)
+    assert [c.label for c in M.effects] == ["motor_lag@thigh"] and "motor_lag_all was dropped" in sel.pruned[0]
+
+
 def test_a_delay_and_a_lag_are_ranked_by_the_product_of_their_errors():
     """``Selector.best``: of a delay and a lag that both pass, the fitted segments' error alone
     would rank the lag first (2% lower) and so does the sum with the validation's (the fitted

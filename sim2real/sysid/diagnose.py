@@ -114,6 +114,8 @@ class DiagnoseConfig:
         validation errors have the lower product is named (false: the lower sum; ``SelectConfig``).
       swap: each named effect of a model with two or more is tried replaced by the candidate that
         screens best in its place, and replaced where that passes the test (``SelectConfig``).
+      prune_fit: the backward check keeps an effect whose removal makes the fitted segments' error
+        more than this many times higher, whatever the validation segments say (0: off; ``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
@@ -189,6 +191,7 @@ class DiagnoseConfig:
     pair_screen: int = SelectConfig.pair_screen
     timing_relative: bool = SelectConfig.timing_relative
     swap: bool = SelectConfig.swap
+    prune_fit: float = SelectConfig.prune_fit
     refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
@@ -650,7 +653,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                     backlash_starts=cfg.backlash_starts, band_scan=cfg.band_scan,
                                     band_shown=cfg.band_shown, timing_restart=cfg.timing_restart,
                                     freeze_at_noise=freeze, pair_screen=cfg.pair_screen,
-                                    timing_relative=cfg.timing_relative, swap=cfg.swap),
+                                    timing_relative=cfg.timing_relative, swap=cfg.swap,
+                                    prune_fit=cfg.prune_fit),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
                        allowed=cfg.expressible or None)
         final, steps = sel.run()

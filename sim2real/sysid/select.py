@@ -219,6 +219,13 @@ class SelectConfig:
         stands in for: beside a band that passed the first round for a linear axis's delay, the
         delay never screened above zero (the combos list's 6097: screened on top of the friction
         alone, the delay replaces the band at a validation ratio of 0.22). ``tuning.md`` step 86.
+      prune_fit: the backward check keeps an effect whose removal multiplies the fitted segments'
+        objective by more than this, whatever the validation segments say (0: no such rule). A
+        stand-in that lost its reason no longer carries the fit; an effect the rest cannot
+        replace by a factor of 10 on most of the data is not one, and validation tails that
+        disagree see less than the fit does (a fallen hopper's tails kept a thigh motor's lag
+        and dropped the shared lag of all three motors that fitted 96x better, plant 40 ms on
+        all three: ``benchmarks/results/closed_loop_warm_std_hopper/NOTE.md``).
     """
 
     min_gain: float = 0.05
@@ -244,6 +251,7 @@ class SelectConfig:
     pair_screen: int = 2
     timing_relative: bool = True
     swap: bool = True
+    prune_fit: float = 10.0
 
 
 TIMING = ("action_delay", "motor_lag")
@@ -1031,6 +1039,8 @@ class Selector:
             for unit in self._units(M):
                 R = self._without_all(M, unit)
                 ok, ratio, t, _ = self._accept(R, M, not R.effects)
+                if not ok and self._carries_fit(M, R, unit, ratio, t):
+                    continue
                 if not ok and (worst is None or ratio > worst[1]):
                     worst = (unit, ratio, t, R)
             if worst is None:
@@ -1044,6 +1054,19 @@ class Selector:
         if M is start:
             return M, steps
         return M, self._path(M, steps)   # the forward path of what stays
+
+    def _carries_fit(self, M: Model, R: Model, unit: list[Candidate], ratio: float, t: float) -> bool:
+        """Does ``unit`` carry ``M``'s fit (``R``, ``M`` without it, fits the fitted segments more
+        than ``prune_fit`` times worse)? Then the backward check keeps it, with a note."""
+        k = self.cfg.prune_fit
+        worse = R.result.phi / max(M.result.phi, 1e-300)
+        if not k or worse <= k:
+            return False
+        note = (f"{' + '.join(c.label for c in unit)} kept although the validation segments alone would drop it "
+                f"(ratio {ratio:.3f}, t = {t:.1f}): without it the fitted segments' error is {worse:.3g}x higher")
+        if note not in self.pruned:
+            self.pruned.append(note)
+        return True
 
     def _without_all(self, M: Model, drop: list[Candidate]) -> Model:
         """``M`` re-fitted without the effects ``drop`` (one at a time, the last first), validated
