@@ -648,6 +648,11 @@ def test_backward_check_keeps_an_effect_that_carries_the_fit():
     sel.cfg = dataclasses.replace(sel.cfg, prune_fit=0.0)     # the validation alone: A goes
     M, path = sel._prune(steps[-1], steps)
     assert [c.label for c in M.effects] == ["motor_lag@thigh"] and "motor_lag_all was dropped" in sel.pruned[0]
+    from sim2real.sysid.diagnose import DiagnoseConfig
+
+    for bad in (1.0, -2.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="prune_fit"):
+            DiagnoseConfig(model="m.xml", recordings=("a.csv",), prune_fit=bad).check()
 
 
 def test_a_delay_and_a_lag_are_ranked_by_the_product_of_their_errors():

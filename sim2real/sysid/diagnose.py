@@ -224,6 +224,8 @@ class DiagnoseConfig:
             raise ValueError(f"timing_restart={self.timing_restart}: must be 0 (off) or a factor between 0 and 1")
         if self.pair_screen < 0:
             raise ValueError(f"pair_screen={self.pair_screen}: must be >= 0 (0: off)")
+        if not (self.prune_fit == 0 or (math.isfinite(self.prune_fit) and self.prune_fit > 1)):
+            raise ValueError(f"prune_fit={self.prune_fit}: must be 0 (off) or a factor > 1")
         if self.finer < 0:
             raise ValueError(f"finer={self.finer}: must be >= 0 (0: off)")
         if not 0 < self.finer_ratio <= 1:
