@@ -402,9 +402,7 @@ def _earlier(args, methods, per_seed):
         return r["method"] in methods and (r["method"] not in seeded or int(r["seed"]) in per_seed)
 
     try:
-        with open(os.path.join(out, "results.csv")) as f:
-            rows = [dict(r, seed=int(r["seed"]), **{"return": float(r["return"])}) for r in csv.DictReader(f)
-                    if not replaced(r)]
+        rows = [r for r in read_results(out) if not replaced(r)]
         with open(os.path.join(out, "diagnoses.json")) as f:
             diagnoses = json.load(f)
     except FileNotFoundError as e:
@@ -428,6 +426,12 @@ def _earlier(args, methods, per_seed):
         loop_methods = {"diag_dr_1", "diag_dr_2"} & set(methods)
         seconds = {k: v for k, v in seconds.items() if not (k in methods or (k == "diag_dr" and loop_methods))}
     return rows, diagnoses, seconds
+
+
+def read_results(folder: str) -> list[dict]:
+    """``folder/results.csv`` (what ``write`` makes) as rows: method, seed (int), return (float)."""
+    with open(os.path.join(folder, "results.csv")) as f:
+        return [dict(r, seed=int(r["seed"]), **{"return": float(r["return"])}) for r in csv.DictReader(f)]
 
 
 def paired_lines(rows: list[dict], loops: tuple[str, ...] = ("diag_dr_1", "diag_dr_2")) -> list[str]:

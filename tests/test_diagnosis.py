@@ -626,8 +626,6 @@ def test_backward_check_keeps_an_effect_that_carries_the_fit():
     predicts the validation segments 2.8x better than both (they saw less than the fit: the
     hopper's tails after its fall) but fits the fitted segments 96x worse. The validation alone
     would drop A and keep B; A carries the fit, so it stays (with a note) and B goes."""
-    import dataclasses
-
     from sim2real.sysid.candidates import Candidate
 
     A = Candidate("motor_lag_all", "", ("motor_lag_all",), ((0.01,),), (0.01,), ((0.0, 0.2),))
@@ -648,8 +646,6 @@ def test_backward_check_keeps_an_effect_that_carries_the_fit():
     sel.cfg = dataclasses.replace(sel.cfg, prune_fit=0.0)     # the validation alone: A goes
     M, path = sel._prune(steps[-1], steps)
     assert [c.label for c in M.effects] == ["motor_lag@thigh"] and "motor_lag_all was dropped" in sel.pruned[0]
-    from sim2real.sysid.diagnose import DiagnoseConfig
-
     for bad in (1.0, -2.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match="prune_fit"):
             DiagnoseConfig(model="m.xml", recordings=("a.csv",), prune_fit=bad).check()

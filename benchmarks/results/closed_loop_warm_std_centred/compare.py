@@ -5,7 +5,6 @@ nominal policies to the digit, reused with ``closed_loop.py nominal=``): prints 
 
     python benchmarks/results/closed_loop_warm_std_centred/compare.py
 """
-import csv
 import os
 import sys
 
@@ -15,7 +14,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 RES = os.path.dirname(HERE)
 sys.path.insert(0, os.path.dirname(RES))
 
-from closed_loop import paired_lines  # noqa: E402
+from closed_loop import paired_lines, read_results  # noqa: E402
 
 # this folder's run -> (earlier results.csv, the methods taken from it, renamed where a loop)
 SETS = {
@@ -36,9 +35,8 @@ SETS = {
 
 
 def rows_of(path, rename=None):
-    with open(os.path.join(path, "results.csv")) as f:
-        return [dict(r, method=rename[r["method"]]) if rename else r for r in csv.DictReader(f)
-                if rename is None or r["method"] in rename]
+    return [dict(r, method=rename[r["method"]]) if rename else r for r in read_results(path)
+            if rename is None or r["method"] in rename]
 
 
 def section(title, rows, spread):

@@ -122,9 +122,8 @@ def summary(out: str) -> None:
     for m in ("nominal", "oracle_ft", "udr_wide_ft", "simopt", "lsdr"):
         if not os.path.exists(os.path.join(out, m, "results.csv")):
             continue
-        for line in open(os.path.join(out, m, "results.csv")).read().split()[1:]:
-            method, seed, ret = line.split(",")
-            rows.setdefault(method, {})[int(seed)] = float(ret)
+        for r in closed_loop.read_results(os.path.join(out, m)):
+            rows.setdefault(r["method"], {})[r["seed"]] = r["return"]
     for f in sorted(glob.glob(os.path.join(out, "seed*_*", "score.json"))):
         r = json.load(open(f))
         name = f"loop_{r['box']}" + ("_2" if r.get("iteration", 1) == 2 else "")
@@ -151,11 +150,7 @@ def pooled(outs: list[str]) -> None:
     on, and the loop against the others paired by chain. Printed only."""
     import numpy as np
 
-    rows = []
-    for k, out in enumerate(outs):
-        for line in open(os.path.join(out, "results.csv")).read().split()[1:]:
-            method, seed, ret = line.split(",")
-            rows.append({"method": method, "seed": 10 * k + int(seed), "return": float(ret)})
+    rows = [dict(r, seed=10 * k + r["seed"]) for k, out in enumerate(outs) for r in closed_loop.read_results(out)]
     methods = list(dict.fromkeys(r["method"] for r in rows))
     oracle = {r["seed"]: r["return"] for r in rows if r["method"] == "oracle_ft"}
     print(f"{len(outs)} tables: " + ", ".join(outs))
