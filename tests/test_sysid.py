@@ -436,6 +436,34 @@ def test_fitted_xml_scales_the_gain_law_as_the_simulator_does(tmp_path):
     assert fitted.actuator_biasprm[1, 2] == pytest.approx(3.0 * declared.actuator_biasprm[1, 2])
 
 
+def test_fitted_xml_lag_drives_the_force_in_the_step_the_command_arrives(tmp_path):
+    """A motor lag written into fitted.xml moves the joint as the fits' command path does: the
+    filter updated and applied in the same physics step (MuJoCo's ``actearly``), not a step later."""
+    from sim2real.physics.kinds.lag import MotorLag
+    from sim2real.sysid.export import write_fitted_mjcf
+    from sim2real.sysid.system import System
+
+    xml = tmp_path / "m.xml"
+    xml.write_text("""<mujoco><option timestep="0.002"/><worldbody>
+      <body name="a"><joint name="j" type="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/>
+      </body></worldbody><actuator><motor name="m" joint="j" gear="5"/></actuator></mujoco>""")
+    system = System(str(xml))
+    z = np.array(system.spec.default, float)
+    row = system.spec.index("motor_lag:m")
+    z[row] = 0.03
+    write_fitted_mjcf(str(xml), system, z, {}, str(tmp_path / "fitted.xml"))
+    m = mujoco.MjModel.from_xml_path(str(tmp_path / "fitted.xml"))
+    d = mujoco.MjData(m)
+    d.ctrl[:] = 1.0
+    data, u, path = {"rows": np.array([row]), "shared": -1}, np.zeros(1), []
+    for _ in range(5):
+        u, _ = MotorLag.command(None, data, z, u, np.ones(1), None, None, None, 0.002)
+        path.append(5.0 * float(u[0]))
+        mujoco.mj_step(m, d)
+        assert d.qfrc_actuator[0] == pytest.approx(path[-1], rel=1e-5)  # gear x the filtered command
+    assert path[0] == pytest.approx(5.0 * (1 - np.exp(-0.002 / 0.03)), rel=1e-5)
+
+
 def test_physics_step_is_coarsened_only_while_it_predicts_the_same(tmp_path):
     """A pendulum modelled at 0.25 ms and logged at 100 Hz: ``choose_substeps`` keeps a coarser
     step (fewer than the model's 40 per sample) whose native predictions match the model's own

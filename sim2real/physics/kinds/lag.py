@@ -31,6 +31,10 @@ def _write(ctx, a: int, name: str, v: float) -> None:
         act = ctx.spec.actuator(ctx.system.actuators[a])
         act.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
         act.dynprm[0] = v
+        # the command path filters the command and applies it in the same physics step; MuJoCo's
+        # filter by default drives the force with the activation from before the step, one physics
+        # step later (a hopper plant written that way showed as a 1-step delay beside its lag)
+        act.actearly = 1
         act.actlimited = 0
     elif v > 0:
         ctx.only_numeric(name, "the actuator already has activation dynamics; MuJoCo takes one filter")
