@@ -59,7 +59,7 @@ elif [ "$PHASE" = more ]; then
   mkdir -p /tmp/res/two_loops && cp -r .hopper_nominal/diag/* /tmp/res/two_loops/
   for s in 0 1 2; do
     timeout $LIMIT python3 benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain box=centred seed=$s \
-      nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain_$s.txt 2>&1 &
+      "config_set=${EXTRA_SET:-}" nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain_$s.txt 2>&1 &
     timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=simopt only_seeds=$s \
       nominal=.hopper_nominal/nominal out=/tmp/res/simopt_s$s work=/tmp/cl_so$s "$DEV" > /tmp/res/logs/simopt_$s.txt 2>&1 &
   done
@@ -72,7 +72,7 @@ elif [ "$PHASE" = loop2 ]; then
   cp -r .hopper_nominal/two_loops /tmp/res/two_loops
   for s in 0 1 2; do
     timeout $LIMIT python3 benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain iteration=2 \
-      box=centred seed=$s nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain2_$s.txt 2>&1 &
+      box=centred seed=$s "config_set=${EXTRA_SET:-}" nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain2_$s.txt 2>&1 &
   done
   timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=lsdr out=/tmp/res/lsdr work=/tmp/cl_lsdr \
     "$DEV" > /tmp/res/logs/lsdr.txt 2>&1 &
