@@ -3,7 +3,8 @@ named the plant's shared 40 ms lag: its policy (``seed1_centred/``) on the nativ
 on the MJX env with the plant's physics, and on variants of each (the limbs at the masses the
 diagnosis re-fitted lighter; no observation noise; the plant's filters with ``actearly``, driving
 the force in the physics step the command arrives as the env's lag does, where MuJoCo's default
-drives it one 2 ms step later; the env with an action delay of 1 and 2 ms). 2-core CPU, a minute.
+drives it one 2 ms step later, and that with MuJoCo's own 2 ms actuator delay added back; the env
+with an action delay of 1 and 2 ms). 2-core CPU, a minute.
 
     python benchmarks/results/closed_loop_warm_std_hopper/seed2/native_vs_mjx.py [episodes=16]
 """
@@ -23,15 +24,17 @@ PLANT = os.path.join(ROOT, "benchmarks", "plants", "hopper_real.xml")
 LAGS = "motor_lag:thigh=0.04,motor_lag:leg=0.04,motor_lag:foot=0.04"  # the plant's filterexact 40 ms
 
 
-def _plant_with(masses: dict[str, float], folder: str, early: bool = False) -> str:
+def _plant_with(masses: dict[str, float], folder: str, early: bool = False, delay: float = 0.0) -> str:
     """The real plant's MJCF with these geoms' masses (kg) set (their inertia scales with them);
-    ``early``: its motors' filters drive the force in the step the command arrives (``actearly``)."""
+    ``early``: its motors' filters drive the force in the step the command arrives (``actearly``);
+    ``delay``: and MuJoCo's own actuator delay (s) on each motor."""
     xml = open(PLANT).read()
     for geom, m in masses.items():
         xml = xml.replace(f'name="{geom}" ', f'name="{geom}" mass="{m:.6f}" ', 1)
     if early:
-        xml = xml.replace('dynprm="0.04"', 'dynprm="0.04" actearly="true"')
-    path = os.path.join(folder, f"hopper_real_{len(masses)}_{int(early)}.xml")
+        more = f' delay="{delay}" nsample="3"' if delay else ""
+        xml = xml.replace('dynprm="0.04"', f'dynprm="0.04" actearly="true"{more}')
+    path = os.path.join(folder, f"hopper_real_{len(masses)}_{int(early)}_{delay}.xml")
     with open(path, "w") as f:
         f.write(xml)
     return path
@@ -48,6 +51,8 @@ def main(episodes: int = 16) -> None:
                  ("native plant, no observation noise", PLANT, 0.0),
                  ("native plant, limbs at the fitted masses", _plant_with(limbs, tmp), 1e-3),
                  ("native plant, its filters with actearly", _plant_with({}, tmp, early=True), 1e-3),
+                 ("native plant, actearly and a 2 ms actuator delay (MuJoCo's own)",
+                  _plant_with({}, tmp, early=True, delay=0.002), 1e-3),
                  ("MJX env, payload:torso=1.5 + the 40 ms lags", f"payload:torso=1.5,{LAGS}", 0.0),
                  ("MJX env, the same with the limbs at the fitted masses",
                   f"payload:torso=1.5,{LAGS}," + ",".join(f"mass:{b}={fp[f'mass:{b}']}" for b in ("thigh", "leg", "foot")),
