@@ -437,8 +437,9 @@ def test_fitted_xml_scales_the_gain_law_as_the_simulator_does(tmp_path):
 
 
 def test_fitted_xml_lag_drives_the_force_in_the_step_the_command_arrives(tmp_path):
-    """A motor lag written into fitted.xml moves the joint as the fits' command path does: the
-    filter updated and applied in the same physics step (MuJoCo's ``actearly``), not a step later."""
+    """A motor lag written into fitted.xml drives the joint with the torque the fits' command path
+    does: the filter updated and applied in the same physics step (MuJoCo's ``actearly``), not a
+    step later (MuJoCo's default: the first step's torque 0)."""
     from sim2real.physics.kinds.lag import MotorLag
     from sim2real.sysid.export import write_fitted_mjcf
     from sim2real.sysid.system import System
@@ -457,7 +458,7 @@ def test_fitted_xml_lag_drives_the_force_in_the_step_the_command_arrives(tmp_pat
     d.ctrl[:] = 1.0
     data, u, path = {"rows": np.array([row]), "shared": -1}, np.zeros(1), []
     for _ in range(5):
-        u, _ = MotorLag.command(None, data, z, u, np.ones(1), None, None, None, 0.002)
+        u, _ = MotorLag().command(data, z, u, np.ones(1), None, None, None, 0.002)
         path.append(5.0 * float(u[0]))
         mujoco.mj_step(m, d)
         assert d.qfrc_actuator[0] == pytest.approx(path[-1], rel=1e-5)  # gear x the filtered command
