@@ -456,9 +456,10 @@ def test_fitted_xml_lag_drives_the_force_in_the_step_the_command_arrives(tmp_pat
     m = mujoco.MjModel.from_xml_path(str(tmp_path / "fitted.xml"))
     d = mujoco.MjData(m)
     d.ctrl[:] = 1.0
-    data, u, path = {"rows": np.array([row]), "shared": -1}, np.zeros(1), []
+    lag = MotorLag()
+    data, u, path = lag.command_setup(system.mj, system.spec, None), np.zeros(1), []
     for _ in range(5):
-        u, _ = MotorLag().command(data, z, u, np.ones(1), None, None, None, 0.002)
+        u, _ = lag.command(data, z, u, np.ones(1), None, None, None, 0.002)
         path.append(5.0 * float(u[0]))
         mujoco.mj_step(m, d)
         assert d.qfrc_actuator[0] == pytest.approx(path[-1], rel=1e-5)  # gear x the filtered command

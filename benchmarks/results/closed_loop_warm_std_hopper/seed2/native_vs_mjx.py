@@ -45,7 +45,8 @@ def main(episodes: int = 16) -> None:
 
     run = os.path.join(HERE, "seed1_centred")
     fp = json.load(open(os.path.join(HERE, "seed1", "diagnosis.json")))["fitted_params"]
-    limbs = {f"{b}_geom": fp[f"mass:{b}"] for b in ("thigh", "leg", "foot")}
+    fitted = {b: fp[f"mass:{b}"] for b in ("thigh", "leg", "foot")}  # kg, the re-fitted limbs
+    limbs = {f"{b}_geom": m for b, m in fitted.items()}
     with tempfile.TemporaryDirectory() as tmp:
         cases = [("native plant (noise 1e-3, as scored)", PLANT, 1e-3),
                  ("native plant, no observation noise", PLANT, 0.0),
@@ -55,7 +56,7 @@ def main(episodes: int = 16) -> None:
                   _plant_with({}, tmp, early=True, delay=0.002), 1e-3),
                  ("MJX env, payload:torso=1.5 + the 40 ms lags", f"payload:torso=1.5,{LAGS}", 0.0),
                  ("MJX env, the same with the limbs at the fitted masses",
-                  f"payload:torso=1.5,{LAGS}," + ",".join(f"mass:{b}={fp[f'mass:{b}']}" for b in ("thigh", "leg", "foot")),
+                  f"payload:torso=1.5,{LAGS}," + ",".join(f"mass:{b}={m}" for b, m in fitted.items()),
                   0.0)]
         # (the env's action_delay counts 8 ms control steps: 0.125 and 0.25 are 1 and 2 ms)
         cases += [(f"MJX env, payload + lags + an action delay of {8 * d:g} ms",
