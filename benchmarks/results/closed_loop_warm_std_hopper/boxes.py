@@ -19,7 +19,8 @@ candidate, fine-tuned with ``warm_std=0.6065``; 64 evaluation episodes on the re
 ``score.json``. ``iteration=2`` is closed_loop's second loop: ``part=diagnose`` records the
 first loop's policy (``out/seed<s>_<box>/run``, initial states ``200 + s``) into
 ``out/seed<s>_<box>_diag2/``, ``part=retrain`` fine-tunes that policy on this diagnosis into
-``out/seed<s>_<box>_2/``. ``config_set``: more training settings (``seed=1`` for other chains).
+``out/seed<s>_<box>_2/``. ``config_set``: more training settings (``seed=1`` for other chains); ``setup=hopper_b``: the
+held-out plant (``closed_loop.SETUPS``).
 A diagnosis' ``model`` is the env's MJCF on the machine that diagnosed: it is pointed at this
 machine's copy of the same file (``check_same_model`` still compares them).
 """
@@ -55,6 +56,7 @@ class Args:
     config_set: str = ""  # more training settings, ';'-separated (device_run_shared.sh's EXTRA_SET)
     total_steps: int = 30_000_000  # (less only to try the script; the nominal check then refuses)
     episodes: int = 64
+    setup: str = "hopper"  # closed_loop.SETUPS' key: the plant (hopper_b: the held-out one)
 
 
 def main(a: Args):
@@ -67,7 +69,10 @@ def main(a: Args):
         return summary(a.out)
     if a.part == "pooled":
         return pooled([x for x in a.outs.split(",") if x])
-    plant = os.path.join(ROOT, closed_loop.SETUPS["hopper"]["plant"])
+    if a.setup not in closed_loop.SETUPS or not closed_loop.SETUPS[a.setup]["config"].endswith("hopper.yaml"):
+        raise SystemExit(f"setup={a.setup}: one of " + ", ".join(k for k, v in closed_loop.SETUPS.items()
+                                                                  if v["config"].endswith("hopper.yaml")))
+    plant = os.path.join(ROOT, closed_loop.SETUPS[a.setup]["plant"])
     extra = [x for x in a.config_set.split(";") if x.strip()]
     base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, 'configs/hopper.yaml')}"] + SET + extra
                            + [f"dr.diagnosis_box={a.box}", f"total_steps={a.total_steps}"])
@@ -93,7 +98,7 @@ def main(a: Args):
     d["model"] = loop.env_model_path(env_class(base.env))
     json.dump(d, open(os.path.join(diag, "diagnosis.json"), "w"))
     res, dr, why = loop.retrain(policy, dataclasses.replace(base, seed=s), out, d, run_seed=run_seed, warm_start=True,
-                                fallback=closed_loop._wide(closed_loop.SETUPS["hopper"]), warm_std=0.6065)
+                                fallback=closed_loop._wide(closed_loop.SETUPS[a.setup]), warm_std=0.6065)
     score = closed_loop._scores(res["run_dir"], plant, a.episodes, 1)[0]
     json.dump({"seed": s, "box": a.box, "iteration": a.iteration, "return": score,
                "trained_on": "diagnosis" if dr.from_diagnosis else "fallback",

@@ -19,7 +19,8 @@ if ! ls ${WHL:-.whlmin}/trimesh-*.whl > /dev/null 2>&1; then
   mkdir -p /tmp/site/trimesh && printf 'class Trimesh:\n    def __init__(self, *a, **k):\n        raise ImportError("trimesh: a stand-in, not installed")\n' > /tmp/site/trimesh/__init__.py
 fi
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
-COMMON="env=hopper seeds=3 total_steps=30000000 loop_warm_start=true record_until_end=true warm_std=0.6065"
+SETUP=${SETUP:-hopper}  # closed_loop.SETUPS' key: hopper_b is the held-out plant
+COMMON="env=$SETUP seeds=3 total_steps=30000000 loop_warm_start=true record_until_end=true warm_std=0.6065"
 # EXTRA_SET: more training settings (seed=1: other chains than seed 0's; boxes.py config_set=)
 SET="config_set=env_options.max_delay=8;dr.diagnosis_box=span${EXTRA_SET:+;$EXTRA_SET}"
 DIAG="diagnose_set=effects=[none,coulomb_friction,viscous_damping,joint_stiffness,sensor_offset,mass_offset,action_delay,motor_lag,actuator_saturation,backlash,motor_lag_all]"
@@ -30,7 +31,7 @@ mkdir -p /tmp/res/logs
 if [ "${PHASE:-1}" = 1 ]; then
   timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=nominal out=/tmp/res/nominal \
     work=/tmp/cl_nom "$DEV" > /tmp/res/logs/nominal.txt 2>&1
-  NOM=/tmp/cl_nom/hopper/nominal
+  NOM=/tmp/cl_nom/$SETUP/nominal
   LEFT=$(( LIMIT - ($(date +%s) - T0) ))
   for m in oracle_ft udr_wide_ft; do
     timeout $LEFT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=$m nominal=$NOM out=/tmp/res/$m \
@@ -42,14 +43,14 @@ if [ "${PHASE:-1}" = 1 ]; then
   done
   wait
   # the policy and its config (what nominal= and a warm start read), not the checkpoints (over 16 MiB)
-  tar czf $OUT/nominal.tgz --exclude=nominal/checkpoints -C /tmp/cl_nom/hopper nominal
+  tar czf $OUT/nominal.tgz --exclude=nominal/checkpoints -C /tmp/cl_nom/$SETUP nominal
 elif [ "$PHASE" = boxes ]; then
   # the loop's retraining on two boxes around the same diagnoses (boxes.py part=diagnose, run on the
   # 2-core CPU from the nominal.tgz of PHASE=1, copied to .hopper_nominal/diag): six processes
   mkdir -p /tmp/res/boxes && cp -r .hopper_nominal/diag/* /tmp/res/boxes/
   for s in 0 1 2; do for b in ${BOXES:-centred span}; do
     timeout $LIMIT python3 benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain box=$b seed=$s \
-      "config_set=${EXTRA_SET:-}" nominal=.hopper_nominal/nominal out=/tmp/res/boxes > /tmp/res/logs/retrain_${s}_$b.txt 2>&1 &
+      "config_set=${EXTRA_SET:-}" setup=$SETUP nominal=.hopper_nominal/nominal out=/tmp/res/boxes > /tmp/res/logs/retrain_${s}_$b.txt 2>&1 &
   done; done
   wait
   rm -rf /tmp/res/boxes/*/run/checkpoints /tmp/res/boxes/*_*/run/checkpoints
@@ -59,7 +60,7 @@ elif [ "$PHASE" = more ]; then
   mkdir -p /tmp/res/two_loops && cp -r .hopper_nominal/diag/* /tmp/res/two_loops/
   for s in 0 1 2; do
     timeout $LIMIT python3 benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain box=centred seed=$s \
-      "config_set=${EXTRA_SET:-}" nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain_$s.txt 2>&1 &
+      "config_set=${EXTRA_SET:-}" setup=$SETUP nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain_$s.txt 2>&1 &
     timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=simopt only_seeds=$s \
       nominal=.hopper_nominal/nominal out=/tmp/res/simopt_s$s work=/tmp/cl_so$s "$DEV" > /tmp/res/logs/simopt_$s.txt 2>&1 &
   done
@@ -72,7 +73,7 @@ elif [ "$PHASE" = loop2 ]; then
   cp -r .hopper_nominal/two_loops /tmp/res/two_loops
   for s in 0 1 2; do
     timeout $LIMIT python3 benchmarks/results/closed_loop_warm_std_hopper/boxes.py part=retrain iteration=2 \
-      box=centred seed=$s "config_set=${EXTRA_SET:-}" nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain2_$s.txt 2>&1 &
+      box=centred seed=$s "config_set=${EXTRA_SET:-}" setup=$SETUP nominal=.hopper_nominal/nominal out=/tmp/res/two_loops > /tmp/res/logs/retrain2_$s.txt 2>&1 &
   done
   timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=lsdr out=/tmp/res/lsdr work=/tmp/cl_lsdr \
     "$DEV" > /tmp/res/logs/lsdr.txt 2>&1 &
@@ -80,7 +81,7 @@ elif [ "$PHASE" = loop2 ]; then
   rm -rf /tmp/res/two_loops/*/run/checkpoints
 else
   NOM=$PWD/.hopper_nominal/nominal
-  [ -d /tmp/cl_nom/hopper/nominal ] && NOM=/tmp/cl_nom/hopper/nominal  # the same machine, still warm
+  [ -d /tmp/cl_nom/$SETUP/nominal ] && NOM=/tmp/cl_nom/$SETUP/nominal  # the same machine, still warm
   ls $NOM/policy.msgpack || exit 1
   for s in 0 1 2; do
     timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" "$DIAG" methods=diag_dr_1 only_seeds=$s \
@@ -89,8 +90,8 @@ else
   wait
   for s in 0 1 2; do
     mkdir -p /tmp/res/s$s/diag
-    cp /tmp/cl_s$s/hopper/loop_$s/iter_1/diagnosis/diagnosis.json /tmp/res/s$s/diag/ 2>/dev/null
-    cp /tmp/cl_s$s/hopper/loop_$s/iter_1/recordings/record.json /tmp/res/s$s/diag/ 2>/dev/null
+    cp /tmp/cl_s$s/$SETUP/loop_$s/iter_1/diagnosis/diagnosis.json /tmp/res/s$s/diag/ 2>/dev/null
+    cp /tmp/cl_s$s/$SETUP/loop_$s/iter_1/recordings/record.json /tmp/res/s$s/diag/ 2>/dev/null
   done
 fi
 for f in /tmp/res/logs/*.txt; do echo "== $f"; grep -v "^WARNING\|^W0000\|^I0000" $f | grep -v "^$" | tail -6; done
