@@ -3,8 +3,9 @@
 
     python benchmarks/closed_loop.py env=pendulum seeds=3 out=benchmarks/results/closed_loop
 
-The real plant is an MJCF stepped by native MuJoCo (``benchmarks/plants/<env>_real.xml``): its
-effects are MuJoCo's own (``frictionloss``, an actuator ``delay`` line), not sim2real's. Methods
+The real plant is an MJCF stepped by native MuJoCo (``benchmarks/plants/<env>_real.xml``;
+``env=hopper_b``: the hopper on a second, held-out plant, ``hopper_real_b.xml``): its effects are
+MuJoCo's own (``frictionloss``, an actuator ``delay`` line, ``filterexact`` lags), not sim2real's. Methods
 (each seed independent; the same env-step budget for every training):
 
 - ``nominal``: PPO on the env's nominal physics;
