@@ -19,8 +19,8 @@ candidate, fine-tuned with ``warm_std=0.6065``; 64 evaluation episodes on the re
 ``score.json``. ``iteration=2`` is closed_loop's second loop: ``part=diagnose`` records the
 first loop's policy (``out/seed<s>_<box>/run``, initial states ``200 + s``) into
 ``out/seed<s>_<box>_diag2/``, ``part=retrain`` fine-tunes that policy on this diagnosis into
-``out/seed<s>_<box>_2/``. ``config_set``: more training settings (``seed=1`` for other chains); ``setup=hopper_b``: the
-held-out plant (``closed_loop.SETUPS``).
+``out/seed<s>_<box>_2/``. ``config_set``: more training settings (``seed=1`` for other chains);
+``setup=hopper_b``: the held-out plant (``closed_loop.SETUPS``).
 A diagnosis' ``model`` is the env's MJCF on the machine that diagnosed: it is pointed at this
 machine's copy of the same file (``check_same_model`` still compares them).
 """
