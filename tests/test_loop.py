@@ -431,3 +431,32 @@ def test_loop_settings_that_cannot_apply_are_refused():
     with pytest.raises(ConfigError, match="episodes=1"):
         LoopConfig(target="real.xml", out="o", episodes=1)
     assert LoopConfig(target="real.xml", out="o", warm_start=True, warm_std=0.6).warm_std == 0.6
+
+
+def test_closed_loop_plants_hold_the_truth_the_benchmark_trains_its_oracle_on(monkeypatch):
+    """``benchmarks/closed_loop.py`` writes each plant's effects twice: in the plant's MJCF (what
+    is scored) and as the env's physics (``truth``: what the oracle trains on). The hopper plants'
+    payload and lags must agree, and every truth must be a valid physics vector inside its wide
+    box (the held-out plant's values were chosen off the box's centre, not outside it)."""
+    import importlib
+
+    import mujoco
+
+    monkeypatch.syspath_prepend(os.path.join(ROOT, "benchmarks"))
+    closed_loop = importlib.import_module("closed_loop")
+
+    for name, setup in closed_loop.SETUPS.items():
+        env = make(yaml.safe_load(open(os.path.join(ROOT, setup["config"])))["env"])
+        env.z_of(**setup["truth"])  # bounds and names checked
+        for p, v in setup["truth"].items():
+            if p in setup["wide"]:
+                lo, hi = setup["wide"][p]
+                assert lo <= v <= hi, (name, p, v)
+        if not name.startswith("hopper"):
+            continue
+        m = mujoco.MjModel.from_xml_path(os.path.join(ROOT, setup["plant"]))
+        payload = m.body_mass[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "payload")]
+        assert payload == pytest.approx(setup["truth"]["payload:torso"]), name
+        for motor in ("thigh", "leg", "foot"):
+            a = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, motor)
+            assert m.actuator_dynprm[a, 0] == pytest.approx(setup["truth"][f"motor_lag:{motor}"]), (name, motor)
