@@ -446,7 +446,7 @@ def test_closed_loop_plants_hold_the_truth_the_benchmark_trains_its_oracle_on(mo
     closed_loop = importlib.import_module("closed_loop")
 
     for name, setup in closed_loop.SETUPS.items():
-        env = make(yaml.safe_load(open(os.path.join(ROOT, setup["config"])))["env"])
+        env = make(config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, setup['config'])}"]).env)
         env.z_of(**setup["truth"])  # bounds and names checked
         for p, v in setup["truth"].items():
             if p in setup["wide"]:

@@ -69,12 +69,13 @@ def main(a: Args):
         return summary(a.out)
     if a.part == "pooled":
         return pooled([x for x in a.outs.split(",") if x])
-    if a.setup not in closed_loop.SETUPS or not closed_loop.SETUPS[a.setup]["config"].endswith("hopper.yaml"):
-        raise SystemExit(f"setup={a.setup}: one of " + ", ".join(k for k, v in closed_loop.SETUPS.items()
-                                                                  if v["config"].endswith("hopper.yaml")))
-    plant = os.path.join(ROOT, closed_loop.SETUPS[a.setup]["plant"])
+    hoppers = [k for k, v in closed_loop.SETUPS.items() if v["config"].endswith("hopper.yaml")]
+    if a.setup not in hoppers:
+        raise SystemExit(f"setup={a.setup}: one of {', '.join(hoppers)}")
+    setup = closed_loop.SETUPS[a.setup]
+    plant = os.path.join(ROOT, setup["plant"])
     extra = [x for x in a.config_set.split(";") if x.strip()]
-    base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, 'configs/hopper.yaml')}"] + SET + extra
+    base = config_lib.load(TrainConfig, [f"config={os.path.join(ROOT, setup['config'])}"] + SET + extra
                            + [f"dr.diagnosis_box={a.box}", f"total_steps={a.total_steps}"])
     if a.total_steps == Args.total_steps:
         closed_loop._earlier_nominal(a.nominal, base, 3)
@@ -98,7 +99,7 @@ def main(a: Args):
     d["model"] = loop.env_model_path(env_class(base.env))
     json.dump(d, open(os.path.join(diag, "diagnosis.json"), "w"))
     res, dr, why = loop.retrain(policy, dataclasses.replace(base, seed=s), out, d, run_seed=run_seed, warm_start=True,
-                                fallback=closed_loop._wide(closed_loop.SETUPS[a.setup]), warm_std=0.6065)
+                                fallback=closed_loop._wide(setup), warm_std=0.6065)
     score = closed_loop._scores(res["run_dir"], plant, a.episodes, 1)[0]
     json.dump({"seed": s, "box": a.box, "iteration": a.iteration, "return": score,
                "trained_on": "diagnosis" if dr.from_diagnosis else "fallback",
