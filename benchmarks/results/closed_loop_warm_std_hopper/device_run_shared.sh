@@ -7,7 +7,8 @@
 #            (oracle_ft) and the wide box (udr_wide_ft) from it, two processes; the nominal run
 #            folder comes back in $OUT/nominal.tgz (unpack it into .hopper_nominal/ for PHASE=2).
 #   PHASE=2: the loop (diag_dr_1, fine-tuned) for seeds 0, 1, 2, one process each, from that folder.
-#   PHASE=boxes, more, loop2: boxes.py's retraining on the GPU (below; its docstring says the order).
+#   PHASE=boxes, more, loop2: boxes.py's retraining on the GPU (below; its docstring says the order);
+#   PHASE=simopt: SimOpt alone from .hopper_nominal's nominal.
 # Settings as device_run.sh (closed_loop_until_end's fifth call with loop_warm_start and
 # warm_std=0.6065): the real budget's 3 episodes logged past the fall, an 8-step delay line,
 # the span box, the shared-lag candidate motor_lag_all.
@@ -66,6 +67,14 @@ elif [ "$PHASE" = more ]; then
   done
   wait
   rm -rf /tmp/res/two_loops/*/run/checkpoints
+elif [ "$PHASE" = simopt ]; then
+  # SimOpt alone from each seed's nominal recordings (PHASE=more without the first loop again,
+  # whose policies came back from PHASE=boxes): three processes, .hopper_nominal as above
+  for s in 0 1 2; do
+    timeout $LIMIT python3 benchmarks/closed_loop.py $COMMON "$SET" methods=simopt only_seeds=$s \
+      nominal=.hopper_nominal/nominal out=/tmp/res/simopt_s$s work=/tmp/cl_so$s "$DEV" > /tmp/res/logs/simopt_$s.txt 2>&1 &
+  done
+  wait
 elif [ "$PHASE" = loop2 ]; then
   # the second loop's retraining from the first's policies on the diagnoses of their recordings
   # (boxes.py part=diagnose iteration=2 on the 2-core CPU; .hopper_nominal/two_loops holds
