@@ -122,7 +122,17 @@ def run_case(case: sysid_cases.Case, work: str, settings: dict | None = None) ->
     return row
 
 
-def summarise(rows: list[dict], title: str, jobs: int = 1, devices: int = 1) -> str:
+def ran_on(jobs: int, devices: int) -> str:
+    """What the cases ran on, for the summary's time line (called after the runs: JAX may start
+    here then). The diagnosis simulates on JAX's default backend: a GPU where there is one."""
+    import jax
+
+    if jax.default_backend() == "cpu":
+        return f"{cpu_cores()} CPU cores, {jobs} case(s) at a time, {devices} XLA CPU device(s) each"
+    return f"one {jax.devices()[0].device_kind} ({jax.default_backend()}), {jobs} case(s) at a time"
+
+
+def summarise(rows: list[dict], title: str, jobs: int = 1, devices: int = 1, where: str = "") -> str:
     def pct(a, b):
         return f"{a}/{b} ({100 * a / b:.0f}%)" if b else "0/0"
 
@@ -140,7 +150,7 @@ def summarise(rows: list[dict], title: str, jobs: int = 1, devices: int = 1) -> 
          f"- held-out error never worse than the nominal model's: "
          f"**{pct(sum(r.get('never_worse') is True for r in rows), len(rows))}**",
          f"- named effects' parameters within 25% of the truth: **{pct(sum(r['params_within_25'] is True for r in named_rows), len(named_rows))}**",
-         f"- seconds per case ({cpu_cores()} CPU cores, {jobs} case(s) at a time, {devices} XLA CPU device(s) each): median {np.median([r['seconds'] for r in rows]):.1f}, "
+         f"- seconds per case ({where or f'{cpu_cores()} CPU cores, {jobs} case(s) at a time, {devices} XLA CPU device(s) each'}): median {np.median([r['seconds'] for r in rows]):.1f}, "
          f"max {np.max([r['seconds'] for r in rows]):.1f}; 8 s recordings: median "
          f"{np.median([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}, max "
          f"{np.max([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}",
@@ -224,7 +234,7 @@ def main(args: Settings):
         w.writeheader()
         w.writerows(rows)
     text = summarise(rows, f"{args.split} split ({len(rows)} cases{', only ' + args.only if args.only else ''})",
-                     args.jobs, devices)
+                     args.jobs, devices, ran_on(args.jobs, devices))
     vis_path = os.path.join(OUT, "visibility", f"{args.split}.csv")
     if os.path.exists(vis_path):  # the list's visibilities, once computed (effect_visibility.py)
         import effect_visibility
