@@ -1504,6 +1504,26 @@ def test_the_visibility_table_counts_answers_per_band():
     assert "| >= 30 | 0/0 | 1/1 (100%) |" in text and text.strip().endswith("- 2.00: b -> y")
 
 
+
+def test_the_benchmark_summary_names_the_backend_its_cases_ran_on(monkeypatch):
+    """``diagnosis_independent.ran_on``: the time line says what the diagnoses simulated on -- the
+    host's CPU cores, or the GPU that is JAX's default backend (it printed the CPU count there)."""
+    import jax
+
+    spec = importlib.util.spec_from_file_location("bench_diagnosis_independent",
+                                                  os.path.join(ROOT, "benchmarks", "diagnosis_independent.py"))
+    di = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = di
+    spec.loader.exec_module(di)
+    assert "CPU cores, 1 case(s) at a time, 2 XLA CPU device(s) each" in di.ran_on(1, 2)
+
+    class Gpu:
+        device_kind = "NVIDIA H200"
+
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    monkeypatch.setattr(jax, "devices", lambda *a: [Gpu()])
+    assert di.ran_on(1, 16) == "one NVIDIA H200 (gpu), 1 case(s) at a time"
+
 _SERVO_LIMIT = cases.Case(3834, "linear_axis", "single", (("actuator_saturation", "drive", 2),),
                           design=dataclasses.replace({c.seed: c for c in cases.split_cases("beside")}[3834].design,
                                                      seconds=6.0, rate=500.0))
