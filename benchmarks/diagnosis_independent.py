@@ -132,7 +132,9 @@ def ran_on(jobs: int, devices: int) -> str:
     return f"one {jax.devices()[0].device_kind} ({jax.default_backend()}), {jobs} case(s) at a time"
 
 
-def summarise(rows: list[dict], title: str, jobs: int = 1, devices: int = 1, where: str = "") -> str:
+def summarise(rows: list[dict], title: str, where: str) -> str:
+    """The figures, confusion table and per-condition accuracy; ``where``: what the cases ran on
+    (``ran_on``)."""
     def pct(a, b):
         return f"{a}/{b} ({100 * a / b:.0f}%)" if b else "0/0"
 
@@ -150,7 +152,7 @@ def summarise(rows: list[dict], title: str, jobs: int = 1, devices: int = 1, whe
          f"- held-out error never worse than the nominal model's: "
          f"**{pct(sum(r.get('never_worse') is True for r in rows), len(rows))}**",
          f"- named effects' parameters within 25% of the truth: **{pct(sum(r['params_within_25'] is True for r in named_rows), len(named_rows))}**",
-         f"- seconds per case ({where or f'{cpu_cores()} CPU cores, {jobs} case(s) at a time, {devices} XLA CPU device(s) each'}): median {np.median([r['seconds'] for r in rows]):.1f}, "
+         f"- seconds per case ({where}): median {np.median([r['seconds'] for r in rows]):.1f}, "
          f"max {np.max([r['seconds'] for r in rows]):.1f}; 8 s recordings: median "
          f"{np.median([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}, max "
          f"{np.max([r['seconds'] for r in rows if r['design_seconds'] == 8.0] or [np.nan]):.1f}",
@@ -234,7 +236,7 @@ def main(args: Settings):
         w.writeheader()
         w.writerows(rows)
     text = summarise(rows, f"{args.split} split ({len(rows)} cases{', only ' + args.only if args.only else ''})",
-                     args.jobs, devices, ran_on(args.jobs, devices))
+                     ran_on(args.jobs, devices))
     vis_path = os.path.join(OUT, "visibility", f"{args.split}.csv")
     if os.path.exists(vis_path):  # the list's visibilities, once computed (effect_visibility.py)
         import effect_visibility

@@ -26,6 +26,15 @@ sys.modules.setdefault("sysid_cases", cases)  # dataclasses look their module up
 _spec.loader.exec_module(cases)
 
 
+def _benchmark(name: str):
+    """``benchmarks/<name>.py`` as a module (registered by name: its dataclasses look it up)."""
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", os.path.join(ROOT, "benchmarks", f"{name}.py"))
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def _run(tmp_path, case, held_from=None, **cfg):
     """Generate ``case`` (held-out recording from ``held_from`` if given) and diagnose it."""
     folder = tmp_path / "case"
@@ -1493,10 +1502,7 @@ def test_the_visibility_table_counts_answers_per_band():
     """``effect_visibility.table``: each case in its band, single effects and pairs apart, the
     misses listed least visible first (answers as ``diagnosis_independent`` writes them, or as
     read back from its csv)."""
-    spec = importlib.util.spec_from_file_location("bench_effect_visibility", os.path.join(ROOT, "benchmarks", "effect_visibility.py"))
-    ev = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = ev  # (its dataclass looks its module up by name)
-    spec.loader.exec_module(ev)
+    ev = _benchmark("effect_visibility")
     rows = [dict(case="a", kind="single", correct=True, named="x"), dict(case="b", kind="single", correct="False", named="y"),
             dict(case="c", kind="double", correct="True", named="z"), dict(case="d", kind="single", correct="True", named="w")]
     text = ev.table(rows, {"a": 0.5, "b": 2.0, "c": 50.0, "d": 12.0})
@@ -1504,17 +1510,12 @@ def test_the_visibility_table_counts_answers_per_band():
     assert "| >= 30 | 0/0 | 1/1 (100%) |" in text and text.strip().endswith("- 2.00: b -> y")
 
 
-
 def test_the_benchmark_summary_names_the_backend_its_cases_ran_on(monkeypatch):
     """``diagnosis_independent.ran_on``: the time line says what the diagnoses simulated on -- the
     host's CPU cores, or the GPU that is JAX's default backend (it printed the CPU count there)."""
     import jax
 
-    spec = importlib.util.spec_from_file_location("bench_diagnosis_independent",
-                                                  os.path.join(ROOT, "benchmarks", "diagnosis_independent.py"))
-    di = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = di
-    spec.loader.exec_module(di)
+    di = _benchmark("diagnosis_independent")
     assert "CPU cores, 1 case(s) at a time, 2 XLA CPU device(s) each" in di.ran_on(1, 2)
 
     class Gpu:
@@ -1523,6 +1524,7 @@ def test_the_benchmark_summary_names_the_backend_its_cases_ran_on(monkeypatch):
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
     monkeypatch.setattr(jax, "devices", lambda *a: [Gpu()])
     assert di.ran_on(1, 16) == "one NVIDIA H200 (gpu), 1 case(s) at a time"
+
 
 _SERVO_LIMIT = cases.Case(3834, "linear_axis", "single", (("actuator_saturation", "drive", 2),),
                           design=dataclasses.replace({c.seed: c for c in cases.split_cases("beside")}[3834].design,
@@ -1575,11 +1577,8 @@ def test_the_oracle_check_starts_at_the_truth_and_classifies_both_ways():
     """``diagnosis_ceiling``: the true effect's first parameter from the truth (a delay in seconds
     to samples), the others from the grid point nearest it or as given, inside the search range;
     the truth passes, the answer passes, or neither does (a tie)."""
-    spec = importlib.util.spec_from_file_location("bench_diagnosis_ceiling", os.path.join(ROOT, "benchmarks", "diagnosis_ceiling.py"))
-    dc = importlib.util.module_from_spec(spec)
     sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
-    sys.modules[spec.name] = dc  # (its dataclass looks its module up by name)
-    spec.loader.exec_module(dc)
+    dc = _benchmark("diagnosis_ceiling")
     from sim2real.sysid.candidates import Candidate
 
     delay = Candidate("action_delay", "", ("action_delay",), ((1.0,), (4.0,)), (1.0,), ((0.0, 16.0),))
