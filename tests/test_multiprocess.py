@@ -1,6 +1,7 @@
 """Several processes (jax.distributed, one per host or per GPU) run data-parallel PPO as one
 process with all the devices would: checked with 2 processes of one CPU device each, through the
-training driver (``processes=2``) and through the Python API (``data_parallel.globalize``).
+training driver (``processes=2``) and through the Python API (``data_parallel.globalize``); the
+driver's data-parallel run on one device computes the same.
 
 Subprocesses: the device count and the distributed runtime are fixed when JAX starts.
 """
@@ -66,20 +67,34 @@ DRIVER = textwrap.dedent("""
         args = ["resume=true", f"out_dir={out}", "name=r", "progress=false"]
     if mode == "process":  # one of 2 processes, one CPU device each, as on 2 hosts
         args += ["processes=2", f"process_id={sys.argv[5]}", f"coordinator=localhost:{sys.argv[6]}"]
-    else:                  # one process with 2 CPU devices
+    elif mode == "one":    # one process with 2 CPU devices
         from sim2real.envs import parallel
         assert parallel.use_cpu_cores(2) == 2
         args += ["devices=all"]
+    else:                  # one process, one device: the same data-parallel program unsplit
+        from sim2real.envs import parallel
+        assert parallel.use_cpu_cores(1) == 1
+        args += ["ppo.data_parallel=true"]
+    from sim2real.training import driver
+    made = []  # the driver's jitted chunk, to count its compilations
+    make_chunk = driver.make_chunk
+    driver.make_chunk = lambda *a: made.append(make_chunk(*a)) or made[-1]
     res = train(config_from_args(args))
-    assert len(jax.devices()) == 2 and res["state"].runner.z.sharding.device_set == set(jax.devices())
+    n = 1 if mode == "single" else 2
+    assert len(jax.devices()) == n and res["state"].runner.z.sharding.device_set == set(jax.devices())
+    if phase == "all":
+        # two chunks, one compilation: the initial state has the shardings every update returns
+        # (a state committed to one device made the second chunk compile again)
+        assert made[0]._cache_size() == 1, made[0]._cache_size()
     leaves = jax.tree_util.tree_leaves((res["state"].params, res["state"].obs_stats))
     np.save(npy, np.concatenate([np.ravel(host_value(x)) for x in leaves]))
 """)
 
 
-def _driver(tmp_path, phases):
+def _driver(tmp_path, phases, single=False):
     """Run the driver on 2 processes (each phase of ``phases`` in turn) and on one process with 2
-    devices; both must end with the same parameters, run folder, metrics and test log."""
+    devices; both must end with the same parameters, run folder, metrics and test log. ``single``:
+    also on one process with one device (``ppo.data_parallel=true``), the same parameters."""
     run = lambda *a: subprocess.Popen([sys.executable, "-c", DRIVER, *map(str, a)],  # noqa: E731
                                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
@@ -93,10 +108,13 @@ def _driver(tmp_path, phases):
         wait([run("process", phase, tmp_path / "multi", tmp_path / f"p{k}.npy", k, port) for k in (0, 1)])
         if phase == "first":
             assert sorted(os.listdir(tmp_path / "multi" / "r" / "checkpoints")) == ["1"]
-    wait([run("one", "all", tmp_path / "one", tmp_path / "one.npy")])
+    wait([run("one", "all", tmp_path / "one", tmp_path / "one.npy"),
+          *([run("single", "all", tmp_path / "single", tmp_path / "single.npy")] if single else [])])
     ref = np.load(tmp_path / "one.npy")
     for k in (0, 1):
         np.testing.assert_allclose(np.load(tmp_path / f"p{k}.npy"), ref, rtol=1e-6, atol=1e-7)
+    if single:  # one device computes what two do, to float rounding (sums split differently)
+        np.testing.assert_allclose(np.load(tmp_path / "single.npy"), ref, rtol=1e-5, atol=1e-6)
     multi, single = tmp_path / "multi" / "r", tmp_path / "one" / "r"
     assert sorted(os.listdir(multi)) == sorted(os.listdir(single))
     assert sorted(os.listdir(multi / "checkpoints")) == ["1", "2"]
@@ -107,9 +125,11 @@ def _driver(tmp_path, phases):
 
 def test_the_training_driver_in_two_processes_trains_as_one_process_with_two_devices(tmp_path):
     """``scripts/train.py ... processes=2 process_id=K coordinator=host:port`` on 2 processes of
-    one CPU device each ends with the parameters of one process with 2 devices; process 0 alone
+    one CPU device each ends with the parameters of one process with 2 devices, and of one with
+    one device (``ppo.data_parallel``: each device collects and learns on its envs, gradients
+    summed over devices; 2 seeds vmapped, 4 updates in 2 chunks, compiled once); process 0 alone
     writes the run folder (config, metrics, tests, policy), both write the checkpoints."""
-    _driver(tmp_path, ["all"])
+    _driver(tmp_path, ["all"], single=True)
 
 
 @pytest.mark.slow  # five processes, each starting JAX and compiling (~115 s on 2 cores; make test-slow)

@@ -7,8 +7,6 @@ import subprocess
 import sys
 import textwrap
 
-import numpy as np
-
 SCRIPT = textwrap.dedent("""
     import jax, jax.numpy as jnp, numpy as np
     from sim2real.envs import parallel
@@ -95,46 +93,6 @@ SCRIPT = textwrap.dedent("""
 def test_split_batch_matches_one_device():
     r = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True, timeout=600)
     assert r.returncode == 0 and "OK" in r.stdout, r.stderr[-3000:]
-
-
-DATA_PARALLEL = textwrap.dedent("""
-    import sys, jax, numpy as np
-    from sim2real.envs import parallel
-    n = int(sys.argv[1])
-    assert parallel.use_cpu_cores(n) == n
-    from sim2real.common import config as config_lib
-    from sim2real.training import driver
-    from sim2real.training.driver import TrainConfig, train
-    made = []  # the driver's jitted chunk, to count its compilations
-    make_chunk = driver.make_chunk
-    driver.make_chunk = lambda *a: made.append(make_chunk(*a)) or made[-1]
-    cfg = config_lib.load(TrainConfig, [
-        "env=pendulum", "algo=udr", "dr.params=[mass:pole]", "dr.low=[0.7]", "dr.high=[1.3]", "ppo.num_envs=8",
-        "ppo.num_steps=16", "ppo.num_minibatches=4", "ppo.net.hidden=[16]", "ppo.data_parallel=true", "num_seeds=2",
-        "total_steps=512", "updates_per_chunk=2", "progress=false", "tensorboard=false", f"out_dir={sys.argv[2]}",
-        "name=r"])
-    out = train(cfg)
-    # two chunks, one compilation: the initial state has the shardings every update returns (a
-    # state committed to one device made the second chunk compile again)
-    assert made[0]._cache_size() == 1, made[0]._cache_size()
-    if n > 1:
-        assert len(out["state"].runner.z.sharding.device_set) == n  # the envs stayed split
-    leaves = jax.tree_util.tree_leaves((out["state"].params, out["state"].obs_stats))
-    np.save(sys.argv[3], np.concatenate([np.ravel(np.asarray(x)) for x in leaves]))
-""")
-
-
-def test_data_parallel_training_is_the_same_on_one_and_two_devices(tmp_path):
-    """ppo.data_parallel: each device collects and learns on its envs, gradients summed over
-    devices; 2 seeds vmapped, 4 updates in 2 chunks through the driver, compiled once: the same
-    parameters and observation statistics on 1 and 2 CPU devices (to float rounding)."""
-    res = {}
-    for n in (1, 2):
-        r = subprocess.run([sys.executable, "-c", DATA_PARALLEL, str(n), str(tmp_path / f"runs{n}"),
-                            str(tmp_path / f"p{n}.npy")], capture_output=True, text=True, timeout=600)
-        assert r.returncode == 0, r.stderr[-3000:]
-        res[n] = np.load(tmp_path / f"p{n}.npy")
-    np.testing.assert_allclose(res[2], res[1], rtol=1e-5, atol=1e-6)
 
 
 def test_data_parallel_refuses_what_it_cannot_split():
