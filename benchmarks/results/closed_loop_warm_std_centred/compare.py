@@ -52,24 +52,36 @@ def section(title, rows, spread):
             + paired_lines(rows) + [""])
 
 
-def main():
-    lines, by_set = [], {}
+def rows_by_set() -> dict[str, list[dict]]:
+    """Each set of five chains (``SETS``' names) -> its rows: this folder's loop and the earlier
+    columns on the same chains."""
+    by_set = {}
     for name, earlier in SETS.items():
         run = os.path.join(HERE, name, name.split("_")[0])
-        if not os.path.exists(os.path.join(run, "results.csv")):
-            continue
-        rows = rows_of(run) + [r for path, ren in earlier for r in rows_of(os.path.join(RES, path), ren)]
-        by_set[name] = rows
+        if os.path.exists(os.path.join(run, "results.csv")):
+            by_set[name] = rows_of(run) + [r for path, ren in earlier for r in rows_of(os.path.join(RES, path), ren)]
+    return by_set
+
+
+def ten_chains(by_set: dict[str, list[dict]], env: str, common: bool = True) -> list[dict]:
+    """Both sets of five chains of ``env`` as one list, a chain numbered 100 * set + seed for the
+    pairing; ``common``: only the methods both sets have."""
+    sets = [n for n in SETS if n.split("_")[0] == env]
+    if not all(n in by_set for n in sets):
+        return []
+    keep = set.intersection(*({r["method"] for r in by_set[n]} for n in sets)) if common else None
+    return [dict(r, seed=100 * k + int(r["seed"])) for k, n in enumerate(sets) for r in by_set[n]
+            if keep is None or r["method"] in keep]
+
+
+def main():
+    lines, by_set = [], rows_by_set()
+    for name, rows in by_set.items():
         lines += section(name, rows, spread=True)
     for env in ("pendulum", "cartpole"):  # both sets of five chains, the methods both have
-        sets = [n for n in SETS if n.split("_")[0] == env]
-        if not all(n in by_set for n in sets):
-            continue
-        common = set.intersection(*({r["method"] for r in by_set[n]} for n in sets))
-        # a chain is (its set, its seed): numbered 100 * set + seed for the pairing
-        rows = [dict(r, seed=100 * k + int(r["seed"])) for k, n in enumerate(sets) for r in by_set[n]
-                if r["method"] in common]
-        lines += section(f"{env}, both sets of five chains (ten)", rows, spread=False)
+        rows = ten_chains(by_set, env)
+        if rows:
+            lines += section(f"{env}, both sets of five chains (ten)", rows, spread=False)
     text = "\n".join(lines)
     print(text)
     with open(os.path.join(HERE, "summary.md"), "w") as f:
