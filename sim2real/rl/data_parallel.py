@@ -10,7 +10,7 @@ whole update, before the epochs), the observation statistics and the episode sta
 Minibatches are *stratified by env*: in every epoch each env permutes its own ``T`` steps with a
 key folded from its global index and gives ``T / num_minibatches`` of them to each minibatch. A
 minibatch is therefore the same set of samples whether the envs sit on 1 device or N, and the
-update is the same to float rounding (``tests/test_parallel.py``; it differs from ``PPO.learn``'s
+update is the same to float rounding (``tests/test_multiprocess.py``; it differs from ``PPO.learn``'s
 permutation over all samples, so ``ppo.data_parallel=true`` is a different, equally valid sampling
 of minibatches, not the same numbers as ``false``). Feed-forward policies only (a recurrent
 policy's minibatches are whole env sequences, whose split over devices would vary in size).
