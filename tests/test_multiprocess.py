@@ -91,9 +91,9 @@ DRIVER = textwrap.dedent("""
 """)
 
 
-def _driver(tmp_path, phases, single=False):
+def _driver(tmp_path, phases, one_device=False):
     """Run the driver on 2 processes (each phase of ``phases`` in turn) and on one process with 2
-    devices; both must end with the same parameters, run folder, metrics and test log. ``single``:
+    devices; both must end with the same parameters, run folder, metrics and test log. ``one_device``:
     also on one process with one device (``ppo.data_parallel=true``), the same parameters."""
     run = lambda *a: subprocess.Popen([sys.executable, "-c", DRIVER, *map(str, a)],  # noqa: E731
                                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -109,11 +109,11 @@ def _driver(tmp_path, phases, single=False):
         if phase == "first":
             assert sorted(os.listdir(tmp_path / "multi" / "r" / "checkpoints")) == ["1"]
     wait([run("one", "all", tmp_path / "one", tmp_path / "one.npy"),
-          *([run("single", "all", tmp_path / "single", tmp_path / "single.npy")] if single else [])])
+          *([run("single", "all", tmp_path / "single", tmp_path / "single.npy")] if one_device else [])])
     ref = np.load(tmp_path / "one.npy")
     for k in (0, 1):
         np.testing.assert_allclose(np.load(tmp_path / f"p{k}.npy"), ref, rtol=1e-6, atol=1e-7)
-    if single:  # one device computes what two do, to float rounding (sums split differently)
+    if one_device:  # one device computes what two do, to float rounding (sums split differently)
         np.testing.assert_allclose(np.load(tmp_path / "single.npy"), ref, rtol=1e-5, atol=1e-6)
     multi, single = tmp_path / "multi" / "r", tmp_path / "one" / "r"
     assert sorted(os.listdir(multi)) == sorted(os.listdir(single))
@@ -129,7 +129,7 @@ def test_the_training_driver_in_two_processes_trains_as_one_process_with_two_dev
     one device (``ppo.data_parallel``: each device collects and learns on its envs, gradients
     summed over devices; 2 seeds vmapped, 4 updates in 2 chunks, compiled once); process 0 alone
     writes the run folder (config, metrics, tests, policy), both write the checkpoints."""
-    _driver(tmp_path, ["all"], single=True)
+    _driver(tmp_path, ["all"], one_device=True)
 
 
 @pytest.mark.slow  # five processes, each starting JAX and compiling (~115 s on 2 cores; make test-slow)
