@@ -65,22 +65,18 @@ DRIVER = textwrap.dedent("""
         args += ["max_chunks=1"]
     elif phase == "resume":  # continue from its checkpoint with the saved config
         args = ["resume=true", f"out_dir={out}", "name=r", "progress=false"]
+    n = 1 if mode == "single" else 2  # the devices of the whole run
     if mode == "process":  # one of 2 processes, one CPU device each, as on 2 hosts
         args += ["processes=2", f"process_id={sys.argv[5]}", f"coordinator=localhost:{sys.argv[6]}"]
-    elif mode == "one":    # one process with 2 CPU devices
+    else:                  # one process with 2 CPU devices, or with one ("single": the same program unsplit)
         from sim2real.envs import parallel
-        assert parallel.use_cpu_cores(2) == 2
-        args += ["devices=all"]
-    else:                  # one process, one device: the same data-parallel program unsplit
-        from sim2real.envs import parallel
-        assert parallel.use_cpu_cores(1) == 1
-        args += ["ppo.data_parallel=true"]
+        assert parallel.use_cpu_cores(n) == n
+        args += ["devices=all"] if n == 2 else ["ppo.data_parallel=true"]
     from sim2real.training import driver
     made = []  # the driver's jitted chunk, to count its compilations
     make_chunk = driver.make_chunk
     driver.make_chunk = lambda *a: made.append(make_chunk(*a)) or made[-1]
     res = train(config_from_args(args))
-    n = 1 if mode == "single" else 2
     assert len(jax.devices()) == n and res["state"].runner.z.sharding.device_set == set(jax.devices())
     if phase == "all":
         # two chunks, one compilation: the initial state has the shardings every update returns

@@ -1,7 +1,7 @@
 """The README's closed-loop figure: every chain's return on the "real" plant, per method, for the
 four rows of the README's table (pendulum and cart-pole, ten chains each on the 2-core CPU; the
 hopper's nine chains and the held-out hopper plant's six, one NVIDIA H200). Reads only committed
-``results.csv`` files (``closed_loop.read_results``); writes ``docs/closed_loop.png``.
+``results.csv`` files (``compare.rows_by_set``, ``boxes.chains``); writes ``docs/closed_loop.png``.
 
     python benchmarks/results/closed_loop_figure.py
 """
@@ -16,10 +16,11 @@ import numpy as np  # noqa: E402
 
 RES = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(RES))
-sys.path[:0] = [os.path.dirname(RES), os.path.join(RES, "closed_loop_warm_std_centred")]
+HOPPER = os.path.join(RES, "closed_loop_warm_std_hopper")
+sys.path[:0] = [os.path.dirname(RES), os.path.join(RES, "closed_loop_warm_std_centred"), HOPPER]
 
+import boxes  # noqa: E402
 import compare  # noqa: E402
-from closed_loop import read_results  # noqa: E402
 
 # (column label, method name per row's naming); the CPU tasks' wide box is the blind one, the
 # hopper's the wide box of closed_loop.py (centred on the first plant's truth, off the held-out one's)
@@ -27,13 +28,11 @@ COLUMNS = [("nominal", "nominal", "nominal"), ("oracle", "oracle_ft", "oracle_ft
            ("wide DR", "udr_blind_ft", "udr_wide_ft"), ("SimOpt", "simopt", "simopt"),
            ("LSDR", None, "lsdr"), ("one loop", "diag_dr_1", "loop_centred"),
            ("two loops", "diag_dr_2", "loop_centred_2")]
-HOPPER = os.path.join(RES, "closed_loop_warm_std_hopper")
 
 
 def hopper_rows(folders):
-    """The chains of several nominal trainings, seed ``s`` of the ``k``-th folder as chain 10 k + s."""
-    return [dict(r, seed=10 * k + r["seed"]) for k, f in enumerate(folders)
-            for r in read_results(os.path.join(HOPPER, f))]
+    """``boxes.chains`` of these folders of ``closed_loop_warm_std_hopper/``."""
+    return boxes.chains([os.path.join(HOPPER, f) for f in folders])
 
 
 def main():

@@ -150,13 +150,18 @@ def summary(out: str) -> None:
     print("\n".join(lines))
 
 
+def chains(outs: list[str]) -> list[dict]:
+    """The rows of several ``part=summary`` folders (other nominal trainings) as one list of chains:
+    seed ``s`` of the ``k``-th folder is chain ``10 k + s``."""
+    return [dict(r, seed=10 * k + r["seed"]) for k, out in enumerate(outs) for r in closed_loop.read_results(out)]
+
+
 def pooled(outs: list[str]) -> None:
-    """The chains of several ``part=summary`` folders (other nominal trainings: seed ``s`` of the
-    ``k``-th folder is chain ``10 k + s``) as one table: each method's mean over the chains it ran
-    on, and the loop against the others paired by chain. Printed only."""
+    """The chains of several ``part=summary`` folders (``chains``) as one table: each method's mean
+    over the chains it ran on, and the loop against the others paired by chain. Printed only."""
     import numpy as np
 
-    rows = [dict(r, seed=10 * k + r["seed"]) for k, out in enumerate(outs) for r in closed_loop.read_results(out)]
+    rows = chains(outs)
     methods = list(dict.fromkeys(r["method"] for r in rows))
     oracle = {r["seed"]: r["return"] for r in rows if r["method"] == "oracle_ft"}
     print(f"{len(outs)} tables: " + ", ".join(outs))
