@@ -231,15 +231,22 @@ def test_record_script_writes_what_the_diagnosis_reads(run_dir, tmp_path):
 
 
 def test_one_loop_iteration_end_to_end(tmp_path):
-    """Train, record on the 'real' pendulum, diagnose, retrain from the diagnosis: one call."""
+    """Train, record on the 'real' pendulum, diagnose, retrain from the diagnosis: one call, as
+    from the shell, in a process whose JAX has 64-bit types on (``JAX_ENABLE_X64=1``: training
+    and the diagnosis stopped on a float64 scan carry before ``_precision.py``)."""
+    from sim2real.common.cli import main_guard
+
     loop = _script("loop")
 
     out = tmp_path / "loop"
-    loop.main(["env=pendulum", "total_steps=1024", "updates_per_chunk=2", "tensorboard=false", "ppo.num_envs=8",
-               "ppo.num_steps=16", "ppo.num_minibatches=2", "ppo.num_epochs=2", "ppo.net.hidden=[16,16]", *SHORT,
-               f"target={PLANT}", "episodes=2", "eval_episodes=2", f"out={out}", "progress=false", "noise=1e-3",
-               "diagnose.effects=[coulomb_friction,action_delay]",  # (a toy policy: keep the answer to what the env can take)
-               "warm_start=true", "warm_std=0.6"])
+    argv = ["env=pendulum", "total_steps=1024", "updates_per_chunk=2", "tensorboard=false", "ppo.num_envs=8",
+            "ppo.num_steps=16", "ppo.num_minibatches=2", "ppo.num_epochs=2", "ppo.net.hidden=[16,16]", *SHORT,
+            f"target={PLANT}", "episodes=2", "eval_episodes=2", f"out={out}", "progress=false", "noise=1e-3",
+            "diagnose.effects=[coulomb_friction,action_delay]",  # (a toy policy: keep the answer to what the env can take)
+            "warm_start=true", "warm_std=0.6"]
+    with jax.enable_x64(True):
+        main_guard(loop.main, argv)
+        assert jax.config.jax_enable_x64  # (restored after the command)
     res = json.load(open(out / "loop.json"))
     assert set(res["scores"]) == {"nominal", "iter_1"}
     cfg = yaml.safe_load(open(out / "iter_1" / "run" / "config.yaml"))

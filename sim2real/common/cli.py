@@ -147,6 +147,7 @@ def main_guard(fn, argv, doc: str | None = None, configs: tuple[str, ...] = ()):
     and SIGTERM exit with status 130 after the job's own clean-up ran. ``-h`` prints ``doc`` (the
     ``__main__`` module's docstring by default) and every key of the ``configs``
     (``"module:Class"`` typed configs: key, type, default, one line of doc), then returns 0."""
+    from sim2real._precision import float32
     from sim2real.common.config import ConfigError
 
     if any(a in ("-h", "--help", "help") for a in argv):
@@ -166,7 +167,8 @@ def main_guard(fn, argv, doc: str | None = None, configs: tuple[str, ...] = ()):
     previous_hook = sys.unraisablehook
     sys.unraisablehook = _quiet_swallowed_interrupt(previous_hook)
     try:
-        fn(argv)
+        with float32():  # JAX_ENABLE_X64 in the environment changes nothing (_precision.py)
+            fn(argv)
     except (ConfigError, KeyError, ValueError, FileNotFoundError, FileExistsError, TypeError,
             NotADirectoryError, IsADirectoryError, PermissionError) as e:
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)

@@ -25,6 +25,7 @@ import mujoco
 import numpy as np
 from scipy.optimize import least_squares
 
+from sim2real._precision import in_float32
 from sim2real.common import output
 from sim2real.common.progress import Bar
 from sim2real.physics.kinds.base import actuator_joint
@@ -310,6 +311,7 @@ def relative_change(before: float, after: float) -> str:
     return f"{100 * (r - 1):.1f}% higher" if r < 2 else f"{r:.1f}x worse"
 
 
+@in_float32
 def diagnose(cfg: DiagnoseConfig) -> dict:
     """Run the whole diagnosis; returns the content of ``diagnosis.json``."""
     cfg.check()

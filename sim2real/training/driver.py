@@ -17,6 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from sim2real._precision import in_float32
 from sim2real.rl import data_parallel
 from sim2real.rl.data_parallel import host_value
 from sim2real.training import checkpoint
@@ -240,6 +241,7 @@ def _resumable_options(algo: str) -> tuple[str, ...]:
     return registry.resumable_options(algo)
 
 
+@in_float32
 def train(cfg: TrainConfig, on_chunk=None) -> dict:
     """Run (or resume) training; returns ``{'state', 'metrics', 'run_dir', 'algo', 'env', 'finished'}``.
 
