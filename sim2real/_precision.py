@@ -5,7 +5,9 @@ start values and the networks are float32 by design, while under ``JAX_ENABLE_X6
 system-identification code) ``mjx.put_model`` keeps MuJoCo's float64 and ``jnp.zeros`` makes
 float64: the two met in a scan's carry and training and the diagnosis both stopped with "carry
 input and carry output must have equal types". The commands (``common/cli.py: main_guard``) and
-the public entry points (``train``, ``diagnose``) run under ``float32``, so the flag changes
+the public entry points (``train``, ``diagnose``) run under ``float32`` (the diagnosis under
+the bits of its own ``precision`` setting; the simulator and the fits take their float type from
+:func:`real`), so the flag changes
 neither what they compute nor their answers (a pendulum's policy byte-identical, EMPS's diagnosis
 the same). An env stepped from the user's own code follows the user's flag (``env.reset`` and
 ``env.step`` run in float64 under it).
@@ -14,6 +16,8 @@ from __future__ import annotations
 
 import contextlib
 import functools
+
+import numpy as np
 
 
 @contextlib.contextmanager
@@ -34,3 +38,12 @@ def in_float32(fn):
             return fn(*args, **kwargs)
 
     return wrapper
+
+
+def real() -> np.dtype:
+    """The floating-point type JAX computes in here and now: float32, or float64 inside
+    ``jax.enable_x64(True)`` (the diagnosis' ``precision=64``). Arrays that meet in a scan's
+    carry are made with it, so the carry's types match in either."""
+    import jax
+
+    return np.dtype(jax.dtypes.canonicalize_dtype(np.float64))

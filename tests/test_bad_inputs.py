@@ -169,6 +169,7 @@ CASES = [
     ("nan_setting", "diagnose", D + ["recordings=[a.csv]", "min_gain=.nan"], {}, "min_gain=nan"),
     ("val_fraction", "diagnose", D + ["recordings=[a.csv]", "val_fraction=0.9"], {}, "val_fraction=0.9"),
     ("negative_finer", "diagnose", D + ["recordings=[a.csv]", "finer=-1"], {}, "finer=-1: must be >= 0"),
+    ("precision_48", "diagnose", D + ["recordings=[a.csv]", "precision=48"], {}, "precision=48: must be 32 or 64"),
     ("finer_ratio_above_one", "diagnose", D + ["recordings=[a.csv]", "finer_ratio=1.5"], {},
      "finer_ratio=1.5: must be a fraction in (0, 1]"),
     ("negative_heldout_gain", "diagnose", D + ["recordings=[a.csv]", "heldout_gain=-0.1"], {},

@@ -271,6 +271,13 @@ def test_segments_start_the_command_path_from_the_recording(tmp_path):
     e_restart = np.asarray(restarted["qpos"][0]) - sh.signals["qpos"][tiles]
     e_pass1 = sh.predict(z[None], sh.v0[None], tiles)["qpos"][0] - sh.signals["qpos"][tiles]
     assert np.sqrt(np.mean(e_pass1 ** 2)) < 0.5 * np.sqrt(np.mean(e_restart ** 2))
+    # the diagnosis' precision=64: the same simulator in float64 (the lag's state carried in it)
+    with jax.enable_x64(True):
+        system64 = System(PENDULUM, dt=rec.dt)
+        sh64 = Shooting(system64, [from_recording(rec, system64)], 20, val_fraction=0.3)
+        q64 = sh64.predict(z[None], sh.v0[None], tiles)["qpos"][0]
+    assert q64.dtype == np.float64
+    np.testing.assert_allclose(q64, e_pass1 + sh.signals["qpos"][tiles], rtol=0, atol=1e-4)
 
 
 def test_a_batch_without_a_band_is_replayed_without_the_band(tmp_path, monkeypatch):

@@ -29,6 +29,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
+from sim2real._precision import real
 from sim2real.physics import kinds
 from sim2real.physics.params import ParamSpec
 
@@ -90,13 +91,13 @@ class Effects:
     def steady_state(self, ctrl) -> EffectState:
         """The command path at rest under ``ctrl [nu]``: the delay line full of it, the motor lag
         settled on it (how a recording of a drive that was already running starts)."""
-        es = {"ctrl": jnp.asarray(ctrl, jnp.float32) + jnp.zeros(self.nu)}
+        es = {"ctrl": jnp.asarray(ctrl, real()) + jnp.zeros(self.nu, real())}
         es.update({name: k.command_state(d, ctrl) for k, name, d in self._command})
         return es
 
     def push(self, es: EffectState, ctrl) -> EffectState:
         """A new command ``[nu]`` arrives (once per control step)."""
-        out = {"ctrl": jnp.asarray(ctrl, jnp.float32)}  # (a strong float32, as the state it replaces)
+        out = {"ctrl": jnp.asarray(ctrl, real())}  # (a strong type, as the state it replaces)
         out.update({name: k.push(d, es[name], ctrl) for k, name, d in self._command})
         return out
 

@@ -17,6 +17,7 @@ import jax
 import jax.numpy as jnp
 import mujoco
 import numpy as np
+from sim2real._precision import real
 from sim2real._mjx import mjx
 
 from sim2real.physics import kinds
@@ -85,7 +86,7 @@ APPLIED_FIELDS = (
 
 def to_mjmodel(pm: PhysicsModel, z) -> mujoco.MjModel:
     """A native ``MjModel`` with the fields ``pm.apply(z)`` computes (a copy; ``pm.mj`` is untouched)."""
-    fields = _applied_fields(pm)(jnp.asarray(z, jnp.float32))
+    fields = _applied_fields(pm)(jnp.asarray(z, real()))
     m = copy.copy(pm.mj)
     for name in APPLIED_FIELDS:
         getattr(m, name)[:] = np.asarray(fields[name])

@@ -27,6 +27,7 @@ import dataclasses
 
 import numpy as np
 
+from sim2real._precision import real
 from sim2real.sysid.shooting import B, Shooting
 
 
@@ -189,7 +190,7 @@ class Fitter:
         the fit never leaves its start (the combos list's 6127: a 0.05 rad sensor offset beside a
         joint spring, fitted from its grid point 0.02 and left there, training objective 1.4e5
         against 13 at the truth; ``tuning.md`` step 77)."""
-        z = np.asarray(z0, np.float32).copy()
+        z = np.asarray(z0, real()).copy()
         v0 = np.asarray(v0, float).copy()
         idx, lo, hi = self.range_of(names, bounds)
         scale = np.array([self.scales[n] for n in names])
@@ -298,7 +299,7 @@ class Fitter:
         ``refine_iters`` unless given)."""
         iters = self.refine_iters if iters is None else iters
         M = len(zs)
-        zs = [np.asarray(z, np.float32) for z in zs]
+        zs = [np.asarray(z, real()) for z in zs]
         v0s = [np.asarray(v, float).copy() for v in v0s]
         dv = self.dv
         lam = 1.0 / self.sigma_v[tiles] ** 2

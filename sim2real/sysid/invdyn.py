@@ -17,6 +17,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
+from sim2real._precision import real
 from sim2real.physics.model_apply import to_mjmodel
 
 
@@ -34,11 +35,11 @@ def residual(system, z, trajs, idx) -> dict[str, np.ndarray]:
     fx = system.effects
     out = {k: [] for k in ("r", "v", "a", "act", "ctrl")}
     const = np.zeros(m.nv)  # torque offsets: the same at every sample
-    cdofs, cf = fx.constant_force(jnp.asarray(z, jnp.float32))
+    cdofs, cf = fx.constant_force(jnp.asarray(z, real()))
     np.add.at(const, cdofs, np.asarray(cf))  # (a dof may repeat)
     for tr, ix in zip(trajs, idx):
         # (the sensing hooks take one state [nq]: every sample its own)
-        q = np.asarray(jax.vmap(lambda qm: fx.unsense(jnp.asarray(z, jnp.float32), qm))(jnp.asarray(tr.q[ix], jnp.float32)))
+        q = np.asarray(jax.vmap(lambda qm: fx.unsense(jnp.asarray(z, real()), qm))(jnp.asarray(tr.q[ix], real())))
         v, a, u, f = tr.v[ix], tr.a[ix], tr.ctrl[ix], tr.qfrc[ix]
         inv = np.empty_like(v)
         act = np.empty_like(v)
@@ -54,7 +55,7 @@ def residual(system, z, trajs, idx) -> dict[str, np.ndarray]:
         fric = np.zeros_like(v)
         dofs = fx.damping_dofs
         if dofs.size and len(v):
-            coef = _damping_coef(fx)(jnp.asarray(z, jnp.float32), jnp.asarray(v, jnp.float32))
+            coef = _damping_coef(fx)(jnp.asarray(z, real()), jnp.asarray(v, real()))
             np.add.at(fric, (slice(None), dofs), np.asarray(coef) * v[:, dofs])  # a dof may repeat
         out["r"].append(act + f + const - inv - fric)
         out["v"].append(v)

@@ -26,6 +26,7 @@ import mujoco
 import numpy as np
 from jax.sharding import PartitionSpec as P
 
+from sim2real._precision import real
 from sim2real.envs import parallel
 from sim2real.physics import stepper
 from sim2real.physics.params import clip
@@ -165,12 +166,12 @@ class Shooting:
         for r, tr in enumerate(trajs):
             act0[r], dact[r] = self._initial_activation(tr)
         self._data = dict(
-            ctrl=jnp.asarray(cat(lambda tr: tr.ctrl), jnp.float32),
-            qfrc=jnp.asarray(cat(lambda tr: tr.qfrc), jnp.float32),
-            q=jnp.asarray(q_all, jnp.float32), v=jnp.asarray(cat(lambda tr: tr.v), jnp.float32),
+            ctrl=jnp.asarray(cat(lambda tr: tr.ctrl), real()),
+            qfrc=jnp.asarray(cat(lambda tr: tr.qfrc), real()),
+            q=jnp.asarray(q_all, real()), v=jnp.asarray(cat(lambda tr: tr.v), real()),
             start=jnp.asarray(st, jnp.int32), first=jnp.asarray(self.tiles.first),
-            act0=jnp.asarray(act0[self.tiles.traj], jnp.float32), q0=jnp.asarray(self.q0, jnp.float32),
-            dact=jnp.asarray(dact[self.tiles.traj], jnp.float32))
+            act0=jnp.asarray(act0[self.tiles.traj], real()), q0=jnp.asarray(self.q0, real()),
+            dact=jnp.asarray(dact[self.tiles.traj], real()))
         # the command path's pre-run: recordings are independent (each starts at rest), so they run
         # side by side, each scanning its own segments in order (``order [R, Smax]``, padded with
         # its last segment); ``flat [S]`` finds segment s in the [R * Smax] result
@@ -373,8 +374,8 @@ class Shooting:
         b, k = len(zs), len(tiles)
         if b > self.B:
             raise ValueError(f"at most {self.B} physics per call")
-        zpad = np.concatenate([zs, np.repeat(zs[:1], self.B - b, 0)]).astype(np.float32)
-        vpad = np.concatenate([v0, np.repeat(v0[:1], self.B - b, 0)]).astype(np.float32)
+        zpad = np.concatenate([zs, np.repeat(zs[:1], self.B - b, 0)]).astype(real())
+        vpad = np.concatenate([v0, np.repeat(v0[:1], self.B - b, 0)]).astype(real())
         out = {}
         import time
 

@@ -7,6 +7,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
+from sim2real._precision import real
 from sim2real.physics.kinds.base import ACTUATOR, Kind, rows, take
 from sim2real.physics.params import Param
 
@@ -56,7 +57,7 @@ class MotorLag(Kind):
 
     def command_state(self, data, ctrl):
         """``[nu]`` the filter's output."""
-        return jnp.asarray(ctrl, jnp.float32) + jnp.zeros(len(data["rows"]))
+        return jnp.asarray(ctrl, real()) + jnp.zeros(len(data["rows"]), real())
 
     def command(self, data, z, lag, u, j, n, qpos, h, qvel=None):
         # exact discretisation over the sub-step
