@@ -5,7 +5,7 @@ Format (README, "Recording format"): one table per file, a row per sample.
 =====================  ===========================================================
 column                 meaning
 =====================  ===========================================================
-``time``               seconds, strictly increasing, uniform sample rate
+``time``               seconds, strictly increasing, uniform sample rate (``MAX_PERIOD_S``)
 ``qpos:<joint>``       measured joint position (m or rad), at least one
 ``qvel:<joint>``       measured joint velocity (optional; else differentiated)
 ``ctrl:<actuator>``    command sent to the actuator, one per actuator of the model
@@ -28,6 +28,12 @@ import numpy as np
 
 KINDS = ("qpos", "qvel", "ctrl", "force", "qfrc")
 _TARGET = {"qpos": "joint", "qvel": "joint", "qfrc": "joint", "ctrl": "actuator", "force": "actuator"}
+# The longest sample period a recording may have, in seconds and in the model's physics steps.
+# Why: a logger's milliseconds (or a ROS stamp's nanoseconds) read as seconds made every sample
+# thousands of physics steps long, and the diagnosis of a 250 Hz log simulated its first segment
+# for minutes without a word; no rigid-body dynamics is identified from samples this far apart.
+MAX_PERIOD_S = 0.5
+MAX_STEPS_PER_SAMPLE = 1000
 
 
 class RecordingError(ValueError):
@@ -268,6 +274,12 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
         row = int(np.argmax(jitter)) + 1
         raise RecordingError(f"{path}: non-uniform sampling at data row {row + 1}: step {dt[row - 1]:.6g} s "
                              f"vs median {med:.6g} s (resample to a fixed rate first)")
+    steps = med / model.opt.timestep
+    if med > MAX_PERIOD_S or steps > MAX_STEPS_PER_SAMPLE:
+        raise RecordingError(f"{path}: column 'time': the samples are {med:.6g} s apart ({steps:.0f} of the model's "
+                             f"{model.opt.timestep:g} s physics steps; at most {MAX_PERIOD_S:g} s and "
+                             f"{MAX_STEPS_PER_SAMPLE} steps): time must be in seconds (milliseconds: divide by 1000; "
+                             f"nanosecond stamps: by 1e9)")
     return Recording(path, t, cols)
 
 
