@@ -443,6 +443,32 @@ def test_fitted_xml_scales_the_gain_law_as_the_simulator_does(tmp_path):
     assert fitted.actuator_biasprm[1, 2] == pytest.approx(3.0 * declared.actuator_biasprm[1, 2])
 
 
+def test_fitted_xml_of_a_model_with_meshes_loads_from_the_diagnosis_folder(tmp_path):
+    """A link drawn from a mesh under the model's ``meshdir``: the fitted file, written in another
+    folder, finds the same mesh (it did not load there: "Error opening file 'assets/link.obj'")."""
+    from sim2real.sysid.export import write_fitted_mjcf
+    from sim2real.sysid.system import System
+
+    robot = tmp_path / "robot"
+    (robot / "assets").mkdir(parents=True)
+    corners = [(x, y, z) for z in (0, -0.3) for x, y in ((-0.02, -0.02), (0.02, -0.02), (0.02, 0.02), (-0.02, 0.02))]
+    faces = ["1 3 2", "1 4 3", "5 6 7", "5 7 8", "1 2 6", "1 6 5", "2 3 7", "2 7 6", "3 4 8", "3 8 7", "4 1 5", "4 5 8"]
+    (robot / "assets" / "link.obj").write_text("".join(f"v {x} {y} {z}\n" for x, y, z in corners)
+                                               + "".join(f"f {f}\n" for f in faces))
+    xml = robot / "pendulum.xml"
+    xml.write_text("""<mujoco><compiler meshdir="assets"/><asset><mesh name="link" file="link.obj"/></asset>
+      <worldbody><body name="link"><joint name="hinge" type="hinge" axis="1 0 0"/>
+        <geom type="mesh" mesh="link" density="1000"/></body></worldbody>
+      <actuator><motor name="m" joint="hinge"/></actuator></mujoco>""")
+    system = System(str(xml))
+    out = tmp_path / "runs" / "diagnosis"
+    out.mkdir(parents=True)
+    write_fitted_mjcf(str(xml), system, np.array(system.spec.default, float), {}, str(out / "fitted.xml"))
+    fitted = mujoco.MjModel.from_xml_path(str(out / "fitted.xml"))
+    assert fitted.body_mass[1] == pytest.approx(mujoco.MjModel.from_xml_path(str(xml)).body_mass[1], rel=1e-5)
+    assert 'meshdir="../../robot/assets"' in (out / "fitted.xml").read_text()  # relative: both may move together
+
+
 def test_fitted_xml_lag_drives_the_force_in_the_step_the_command_arrives(tmp_path):
     """A motor lag written into fitted.xml drives the joint with the torque the fits' command path
     does: the filter updated and applied in the same physics step (MuJoCo's ``actearly``), not a

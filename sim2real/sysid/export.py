@@ -38,6 +38,7 @@ class _Context:
 
 def write_fitted_mjcf(xml_path: str, system, z: np.ndarray, fitted: dict[str, float], path: str) -> None:
     spec = mujoco.MjSpec.from_file(xml_path)
+    _asset_dirs_from(spec, os.path.dirname(os.path.abspath(xml_path)), os.path.dirname(os.path.abspath(path)))
     sp = system.spec
     ctx = _Context(spec, system, dict(zip(sp.names, np.asarray(z, float))))
     for p in sp.params:
@@ -56,6 +57,22 @@ def write_fitted_mjcf(xml_path: str, system, z: np.ndarray, fitted: dict[str, fl
     with open(tmp, "w") as f:
         f.write(xml)
     os.replace(tmp, path)
+
+
+def _asset_dirs_from(spec, model_dir: str, out_dir: str) -> None:
+    """Point the spec's mesh and texture folders, relative in the user's file to ``model_dir``, at
+    the same folders relative to ``out_dir``, where the fitted file is written: a fitted model of a
+    robot with meshes (``meshdir="assets"``) did not load from the diagnosis folder. Relative, so
+    the fitted file and the model's folder may move together; absolute folders are kept."""
+    def read_from_files(*groups):
+        return any(getattr(e, "file", "") for group in groups for e in group)
+
+    for attr, used in (("meshdir", read_from_files(spec.meshes, spec.hfields, spec.skins)),
+                       ("texturedir", read_from_files(spec.textures))):
+        d = getattr(spec, attr)
+        if used and not os.path.isabs(d):
+            setattr(spec, attr, os.path.relpath(os.path.join(model_dir, d), out_dir))
+    spec.modelfiledir = out_dir + os.sep  # (the compile before writing resolves them from there)
 
 
 def _with_comment(xml: str, ctx: _Context, fitted: dict[str, float]) -> str:
