@@ -295,6 +295,43 @@ def force_scale(nominal_refit: dict, actuated: bool) -> dict | None:
     return {"factor": k, "ratios": ratios}
 
 
+def force_like(unit: str) -> bool:
+    """A parameter in kg or N (N m, N s/m, ...): one that scales with the masses along a free
+    swing's unidentifiable force scale (``at_nominal_masses``)."""
+    return unit == "kg" or unit.startswith("N")
+
+
+def at_nominal_masses(system: System, fitter: Fitter, model, tiles, tol: float = 1e-3):
+    """A free swing's fitted ``model`` moved along its unidentifiable force scale to the model's
+    masses: ``(model, k)``, every mass and force-like parameter (a unit of kg or N) times ``k``,
+    the geometric mean of the re-fitted masses' ``nominal / fitted``; ``k = 1`` where nothing moved.
+
+    Why: without a known force, scaling every mass and force by one factor leaves the motion alone
+    (``System.force_known``), and the fit's steps, which hold only that direction's own component,
+    still moved the masses along the directions it shares with an effect: a URDF pendulum's free
+    decay came out at 0.316 kg (0.5 in the file) with its damping 0.0025 (the plant's 0.004). The
+    move is kept only where it is that symmetry, checked by the fit segments' residuals changing by
+    less than ``tol`` (armature or a declared spring anchor the scale: then it is not)."""
+    spec = system.spec
+    masses = [n for n in model.params if spec[n].kind == "body_mass"]
+    z = np.asarray(model.z, float)
+    if system.force_known or not masses:
+        return model, 1.0
+    k = float(np.exp(np.mean([np.log(spec[n].default / z[spec.index(n)]) for n in masses])))
+    if abs(np.log(k)) < 1e-3:
+        return model, 1.0
+    scaled = np.array([force_like(p.unit) for p in spec.params])
+    z_new = np.clip(np.where(scaled, z * k, z), spec.low, spec.high)
+    v0 = np.repeat(model.result.v0[None], 2, 0)
+    r = fitter.residuals(np.stack([z, z_new]), v0, tiles)
+    sse = np.sum(r.reshape(2, -1) ** 2, axis=1)
+    if not sse[1] <= sse[0] * (1 + tol):
+        return model, 1.0
+    std = {n: (None if v is None else v * k) if scaled[spec.index(n)] else v for n, v in model.result.std.items()}
+    return dataclasses.replace(model, result=dataclasses.replace(model.result, z=z_new.astype(model.result.z.dtype),
+                                                                 std=std)), k
+
+
 def force_scale_note(fs: dict) -> str:
     """The report's words for a ``force_scale`` finding."""
     k = fs["factor"]
@@ -547,6 +584,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         build = functools.partial(System, cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay,
                                   mass_above=cfg.mass_above if "mass_offset" in cfg.effects else 0.0)
         system = build()
+        built_notes = len(system.notes)  # (the model's own; the data's are added below)
         unknown = [t for t in cfg.targets if t not in {*system.joints, *system.actuators, *system.bodies}]
         if unknown:  # (before any simulation: a misspelt name costs nothing)
             raise ValueError(f"targets: {unknown} name no joint, actuator or body of {cfg.model} (joints: "
@@ -570,7 +608,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         bar.step(text="choosing the physics step")
         n = choose_substeps(system, trajs[: len(train)])
         if n != system.substeps:
-            kept = system.notes  # (what was found about the data so far)
+            kept = system.notes[built_notes:]  # what was found about the data so far (the step's note is the new build's)
             system = build(substeps=n)
             system.notes += [x for x in kept if x not in system.notes]
         bar.step(text="choosing the prediction horizon")
@@ -697,6 +735,15 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         else:
             answer = "none"
         fitted = 0 if keep == 0 and refit_worse else keep + 1  # index into ``checked``: z0, then steps
+        if fitted:
+            chosen, k = at_nominal_masses(system, fitter, chosen, sh.tiles.of("fit"))
+            steps[keep] = chosen
+            if k != 1.0:
+                for r in energy_rows["candidates"]:  # (the balance's sizes, in the same scale)
+                    if force_like(r["unit"]):
+                        r["value"], r["std"] = r["value"] * k, None if r["std"] is None else r["std"] * k
+                system.notes.append(f"with no known force the fit had moved every mass by x{1 / k:.3g}; the masses, "
+                                    f"forces and dissipations are given at the model's masses (x{k:.3g}: the same motion)")
         z_fit = chosen.z if fitted else z0
         bar.step(text="writing the report")
         d = _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_worse, answer, z_fit,

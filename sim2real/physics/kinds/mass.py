@@ -39,4 +39,7 @@ class BodyMass(Kind):
         b.ipos = [float(x) for x in m.body_ipos[p.index]]
         b.iquat = [float(x) for x in m.body_iquat[p.index]]
         b.inertia = [float(x) * scale for x in m.body_inertia[p.index]]
+        # the principal inertia above replaces a full tensor (a URDF's <inertia ixx.. iyz>): MuJoCo
+        # refuses a body given both; NaN first is MjSpec's "not given"
+        b.fullinertia = [float("nan")] + [0.0] * 5
         b.explicitinertial = True
