@@ -469,6 +469,26 @@ def test_fitted_xml_of_a_model_with_meshes_loads_from_the_diagnosis_folder(tmp_p
     assert 'meshdir="../../robot/assets"' in (out / "fitted.xml").read_text()  # relative: both may move together
 
 
+def test_fitted_xml_of_a_urdf_with_a_refitted_mass_loads(tmp_path):
+    """A URDF link's inertia is a full tensor (``ixx`` .. ``iyz``); the re-fitted mass writes the
+    principal inertia, which must replace it ("fullinertia and diagonal inertia cannot both be
+    specified" lost the file before)."""
+    from sim2real.sysid.export import write_fitted_mjcf
+    from sim2real.sysid.system import System
+
+    urdf = tmp_path / "pendulum.urdf"
+    urdf.write_text("""<robot name="p"><link name="base"/><link name="arm"><inertial><origin xyz="0 0 -0.25"/>
+      <mass value="0.5"/><inertia ixx="0.0105" iyy="0.0105" izz="0.0002" ixy="0.00005" ixz="0" iyz="0"/></inertial></link>
+      <joint name="pivot" type="continuous"><parent link="base"/><child link="arm"/><axis xyz="1 0 0"/></joint></robot>""")
+    system = System(str(urdf))
+    z = np.array(system.spec.default, float)
+    z[system.spec.index("mass:arm")] = 0.75
+    write_fitted_mjcf(str(urdf), system, z, {"mass:arm": 0.75}, str(tmp_path / "fitted.xml"))
+    fitted, declared = (mujoco.MjModel.from_xml_path(str(f)) for f in (tmp_path / "fitted.xml", urdf))
+    assert fitted.body_mass[-1] == pytest.approx(0.75)
+    np.testing.assert_allclose(fitted.body_inertia[-1], 1.5 * declared.body_inertia[-1], rtol=1e-5)
+
+
 def test_fitted_xml_lag_drives_the_force_in_the_step_the_command_arrives(tmp_path):
     """A motor lag written into fitted.xml drives the joint with the torque the fits' command path
     does: the filter updated and applied in the same physics step (MuJoCo's ``actearly``), not a
