@@ -1624,3 +1624,16 @@ def test_without_the_models_masses_a_servos_limit_is_named_on_the_far_scale(tmp_
     assert d2["nominal_refit"]["mass:carriage"]["fitted"] > 10 * 5.0
     d, _ = _run(tmp_path, _SERVO_LIMIT, mass_above=0, freeze_at_noise=False)
     assert d["fit"]["after"] < d2["fit"]["after"]
+
+
+def test_joints_tied_by_an_equality_are_named_in_the_report():
+    """A gripper's fingers tied by an active ``<equality joint>`` (an inactive one ties nothing):
+    an effect named at one finger gets a note that it may sit at the other."""
+    import importlib
+
+    diag = importlib.import_module("sim2real.sysid.diagnose")
+    xml = """<mujoco><worldbody>{bodies}</worldbody><equality>
+      <joint joint1="a" joint2="b"/><joint joint1="c" joint2="d" active="false"/></equality></mujoco>"""
+    bodies = "".join(f'<body name="f{j}"><joint name="{j}" type="slide"/><geom size="0.01" mass="0.1"/></body>'
+                     for j in "abcd")
+    assert diag.tied_joints(mujoco.MjModel.from_xml_string(xml.format(bodies=bodies))) == {"a": ["b"], "b": ["a"]}

@@ -295,6 +295,19 @@ def force_scale(nominal_refit: dict, actuated: bool) -> dict | None:
     return {"factor": k, "ratios": ratios}
 
 
+def tied_joints(m: mujoco.MjModel) -> dict[str, list[str]]:
+    """``{joint: [joints an active <equality joint> ties it to]}``: a gripper's two fingers, a
+    coupled linkage. An effect at one of them moves the other alike, so which one holds it the
+    recordings barely tell (a probe's friction on one finger was named on the other)."""
+    tied: dict[str, list[str]] = {}
+    for e in range(m.neq):
+        if m.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT and m.eq_active0[e] and m.eq_obj2id[e] >= 0:
+            a, b = (m.joint(int(i)).name for i in (m.eq_obj1id[e], m.eq_obj2id[e]))
+            tied.setdefault(a, []).append(b)
+            tied.setdefault(b, []).append(a)
+    return tied
+
+
 def force_like(unit: str) -> bool:
     """A parameter in kg or N (N m, N s/m, ...): one that scales with the masses along a free
     swing's unidentifiable force scale (``at_nominal_masses``)."""
@@ -1164,6 +1177,12 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     fit["per_segment_before"] = [float(f"{e:.4g}") for e in seg[0]]
     nominal_refit = {n: {"nominal": float(spec[n].default), "fitted": float(z_fit[spec.index(n)]),
                          "std": chosen.result.std.get(n), "unit": spec[n].unit} for n in system.nominal}
+    tied = tied_joints(system.mj)
+    for c in chosen.effects:
+        if c.target in tied:
+            notes.append(f"{c.target} is tied to {', '.join(tied[c.target])} by an equality constraint: "
+                         f"`{c.effect}` named at {c.target} may as well sit at {' or '.join(tied[c.target])} "
+                         "(the recordings move them together)")
     far = far_masses(nominal_refit)
     if far:
         notes.append(far)
