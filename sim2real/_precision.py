@@ -5,12 +5,11 @@ start values and the networks are float32 by design, while under ``JAX_ENABLE_X6
 system-identification code) ``mjx.put_model`` keeps MuJoCo's float64 and ``jnp.zeros`` makes
 float64: the two met in a scan's carry and training and the diagnosis both stopped with "carry
 input and carry output must have equal types". The commands (``common/cli.py: main_guard``) and
-the public entry points (``train``, ``diagnose``) run under ``float32`` (the diagnosis under
-the bits of its own ``precision`` setting; the simulator and the fits take their float type from
-:func:`real`), so the flag changes
-neither what they compute nor their answers (a pendulum's policy byte-identical, EMPS's diagnosis
-the same). An env stepped from the user's own code follows the user's flag (``env.reset`` and
-``env.step`` run in float64 under it).
+the public entry points (``train``, ``diagnose``) run under :func:`float32` (the diagnosis under
+the bits of its own ``precision`` setting, its simulator and fits taking their float type from
+:func:`real`), so the flag changes neither what they compute nor their answers (a pendulum's
+policy byte-identical, EMPS's diagnosis the same). An env stepped from the user's own code
+follows the user's flag (``env.reset`` and ``env.step`` run in float64 under it).
 """
 from __future__ import annotations
 

@@ -17,8 +17,8 @@ import jax
 import jax.numpy as jnp
 import mujoco
 import numpy as np
-from sim2real._precision import real
 from sim2real._mjx import mjx
+from sim2real._precision import real
 
 from sim2real.physics import kinds
 from sim2real.physics.params import ParamSpec, clip
