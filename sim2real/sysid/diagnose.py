@@ -331,18 +331,27 @@ def at_nominal_masses(system: System, fitter: Fitter, model, tiles, tol: float =
     if system.force_known or not masses:
         return model, 1.0
     k = float(np.exp(np.mean([np.log(spec[n].default / z[spec.index(n)]) for n in masses])))
-    if abs(np.log(k)) < 1e-3:
-        return model, 1.0
     scaled = np.array([force_like(p.unit) for p in spec.params])
     z_new = np.clip(np.where(scaled, z * k, z), spec.low, spec.high)
-    v0 = np.repeat(model.result.v0[None], 2, 0)
-    r = fitter.residuals(np.stack([z, z_new]), v0, tiles)
-    sse = np.sum(r.reshape(2, -1) ** 2, axis=1)
-    if not sse[1] <= sse[0] * (1 + tol):
-        return model, 1.0
+    if abs(np.log(k)) < 1e-3:
+        k, z_new = 1.0, z
+    else:
+        r = fitter.residuals(np.stack([z, z_new]), np.repeat(model.result.v0[None], 2, 0), tiles)
+        sse = np.sum(r.reshape(2, -1) ** 2, axis=1)
+        if not sse[1] <= sse[0] * (1 + tol):
+            return model, 1.0
     std = {n: (None if v is None else v * k) if scaled[spec.index(n)] else v for n, v in model.result.std.items()}
-    return dataclasses.replace(model, result=dataclasses.replace(model.result, z=z_new.astype(model.result.z.dtype),
-                                                                 std=std)), k
+    # With the masses held the scale is fixed, so what the fit left undetermined along it has an
+    # error: the effects' own, the masses held (a free pendulum's damping had none, "not identified").
+    # (a dissipation the energy balance sized keeps its error: the fits have no scale for it)
+    others = [n for n in model.params if n not in masses and n in fitter.scales]
+    loose = {n for u in model.result.unidentified for n in u} & set(others)
+    unidentified = model.result.unidentified
+    if loose:
+        held_std, unidentified = fitter.errors(z_new, model.result.v0, others, tiles)
+        std.update({n: held_std[n] for n in loose})
+    result = dataclasses.replace(model.result, z=z_new.astype(model.result.z.dtype), std=std, unidentified=unidentified)
+    return dataclasses.replace(model, result=result), k
 
 
 def force_scale_note(fs: dict) -> str:
@@ -748,15 +757,18 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         else:
             answer = "none"
         fitted = 0 if keep == 0 and refit_worse else keep + 1  # index into ``checked``: z0, then steps
-        if fitted:
+        if fitted and not system.force_known:
             chosen, k = at_nominal_masses(system, fitter, chosen, sh.tiles.of("fit"))
             steps[keep] = chosen
-            if k != 1.0:
-                for r in energy_rows["candidates"]:  # (the balance's sizes, in the same scale)
-                    if force_like(r["unit"]):
-                        r["value"], r["std"] = r["value"] * k, None if r["std"] is None else r["std"] * k
-                system.notes.append(f"with no known force the fit had moved every mass by x{1 / k:.3g}; the masses, "
-                                    f"forces and dissipations are given at the model's masses (x{k:.3g}: the same motion)")
+            for r in energy_rows["candidates"]:  # (the balance's sizes, in the same scale)
+                if force_like(r["unit"]):
+                    r["value"], r["std"] = r["value"] * k, None if r["std"] is None else r["std"] * k
+            system.notes.append(
+                "with no known force positions fix forces only up to a common scale: the masses are held at the "
+                "model's (their geometric mean) and every force, dissipation and payload is given relative to them, "
+                "its error with the masses held"
+                + (f" (the fit had moved every mass by x{1 / k:.3g}; all times x{k:.3g}, the same motion)" if k != 1.0
+                   else ""))
         z_fit = chosen.z if fitted else z0
         bar.step(text="writing the report")
         d = _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_worse, answer, z_fit,
@@ -1155,9 +1167,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         notes.append("not identifiable from these recordings (the fit leaves these combinations where they started, "
                      "the nominal values for the model's own parameters; an effect's value along them is no "
                      "measurement): " + "; ".join(
-            " + ".join(f"{w:+.2f} {n}" for n, w in u.items()) for u in unidentified)
-            + (" -- with no known force, positions fix forces only up to a common scale: values are relative "
-               "to the nominal masses" if not system.force_known else ""))
+            " + ".join(f"{w:+.2f} {n}" for n, w in u.items()) for u in unidentified))
     # before / after on the check segments
     (nr_b, pred_b), (nr_a, pred_a) = check_before, check_after
     before, after = float(np.mean(list(nr_b.values()))), float(np.mean(list(nr_a.values())))

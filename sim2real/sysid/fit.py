@@ -255,13 +255,16 @@ class Fitter:
             mu, z, v0, r0, phi = max(trials[best][0] * 0.3, 1e-6), trials[best][1], trials[best][2], rs[best], phis[best]
             if gain < tol:
                 break
-        # standard errors in parameter units from the reduced Gauss-Newton matrix
-        std = {}
-        unidentified = []
-        corr = None
+        # (the directions the steps left put are those reported; the errors are the misfit's)
+        std, unidentified, corr = self._errors(H, sigma2, held_below(sigma2, self._correlation(r0)), names, scale)
+        return Result(z, v0, list(names), std, phi, float(np.sum(r0**2)), int(r0.size), unidentified, it, corr)
+
+    def _errors(self, H, sigma2, held, names, scale):
+        """``(std, unidentified, corr)`` in parameter units from the reduced Gauss-Newton matrix ``H``
+        (``sigma2``: the residual variance; ``held``: the one under which a direction is undetermined)."""
+        std, unidentified, corr = {}, [], None
         if len(names):
-            # (the directions the steps left put are those reported; the errors are the misfit's)
-            w, V, keep = self._identifiable(H, held_below(sigma2, self._correlation(r0)))
+            w, V, keep = self._identifiable(H, held)
             winv = np.where(keep, 1.0 / np.maximum(w, 1e-300), 0.0)
             cov = (V * winv) @ V.T * sigma2
             for k, nm in enumerate(names):
@@ -273,7 +276,18 @@ class Fitter:
                 vec = V[:, i]
                 big = np.argsort(-np.abs(vec))[:4]
                 unidentified.append({names[j]: round(float(vec[j]), 3) for j in big if abs(vec[j]) > 0.2})
-        return Result(z, v0, list(names), std, phi, float(np.sum(r0**2)), int(r0.size), unidentified, it, corr)
+        return std, unidentified, corr
+
+    def errors(self, z, v0, names, tiles):
+        """``(std, unidentified)`` of ``names`` at ``z``, the other parameters held (no step taken):
+        a free swing's effects with its masses held at the model's (``diagnose.at_nominal_masses``)."""
+        names = list(names)
+        scale = np.array([self.scales[n] for n in names])
+        r0, J_t, J_v = self.jacobian(np.asarray(z, real()), np.asarray(v0, float), names, tiles)
+        H = self._reduce(r0, J_t, J_v, v0, tiles)[0]
+        sigma2 = max(self.phi(r0, v0, tiles) / max(r0.size - len(names), 1), 1e-12) * self._correlation(r0)
+        std, unidentified, _ = self._errors(H, sigma2, sigma2, names, scale)
+        return std, unidentified
 
     def _velocity_only(self, v0, solve_v, p, tiles):
         vv = v0.copy()

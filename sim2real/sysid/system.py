@@ -176,7 +176,9 @@ class System:
             if abs(self.h - self.h_model) > 0.01 * self.h_model:
                 self.notes.append(f"simulated at {self.h * 1e3:.4g} ms steps ({self.substeps} per sample of "
                                   f"{dt * 1e3:.4g} ms) instead of the model's {self.h_model * 1e3:.4g} ms"
-                                  + (" (a finer step converged; the physics found does not depend on the step)"
+                                  + ((" (a finer step converged; the physics found does not depend on the step)"
+                                      if self.h < self.h_model else
+                                      " (doubled while its predictions stay within a tenth of the noise of the model's step's)")
                                      if substeps else ""))
             m.opt.timestep = self.h
         if m.opt.iterations > 10 or m.opt.ls_iterations > 10:
