@@ -317,7 +317,9 @@ def force_like(unit: str) -> bool:
 def at_nominal_masses(system: System, fitter: Fitter, model, tiles, tol: float = 1e-3):
     """A free swing's fitted ``model`` moved along its unidentifiable force scale to the model's
     masses: ``(model, k)``, every mass and force-like parameter (a unit of kg or N) times ``k``,
-    the geometric mean of the re-fitted masses' ``nominal / fitted``; ``k = 1`` where nothing moved.
+    the geometric mean of the re-fitted masses' ``nominal / fitted`` (1 where they did not move);
+    ``k = None`` where a force is known (actuators, or torques in ``qfrc:`` columns) or the move
+    is not that symmetry.
 
     Why: without a known force, scaling every mass and force by one factor leaves the motion alone
     (``System.force_known``), and the fit's steps, which hold only that direction's own component,
@@ -328,8 +330,8 @@ def at_nominal_masses(system: System, fitter: Fitter, model, tiles, tol: float =
     spec = system.spec
     masses = [n for n in model.params if spec[n].kind == "body_mass"]
     z = np.asarray(model.z, float)
-    if system.force_known or not masses:
-        return model, 1.0
+    if system.force_known or not masses or any(np.any(tr.qfrc) for tr in fitter.sh.trajs):
+        return model, None
     k = float(np.exp(np.mean([np.log(spec[n].default / z[spec.index(n)]) for n in masses])))
     scaled = np.array([force_like(p.unit) for p in spec.params])
     z_new = np.clip(np.where(scaled, z * k, z), spec.low, spec.high)
@@ -339,7 +341,7 @@ def at_nominal_masses(system: System, fitter: Fitter, model, tiles, tol: float =
         r = fitter.residuals(np.stack([z, z_new]), np.repeat(model.result.v0[None], 2, 0), tiles)
         sse = np.sum(r.reshape(2, -1) ** 2, axis=1)
         if not sse[1] <= sse[0] * (1 + tol):
-            return model, 1.0
+            return model, None
     std = {n: (None if v is None else v * k) if scaled[spec.index(n)] else v for n, v in model.result.std.items()}
     # With the masses held the scale is fixed, so what the fit left undetermined along it has an
     # error: the effects' own, the masses held (a free pendulum's damping had none, "not identified").
@@ -757,9 +759,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         else:
             answer = "none"
         fitted = 0 if keep == 0 and refit_worse else keep + 1  # index into ``checked``: z0, then steps
-        if fitted and not system.force_known:
-            chosen, k = at_nominal_masses(system, fitter, chosen, sh.tiles.of("fit"))
-            steps[keep] = chosen
+        rescaled, k = at_nominal_masses(system, fitter, chosen, sh.tiles.of("fit")) if fitted else (chosen, None)
+        if k is not None:
+            chosen = steps[keep] = rescaled
             for r in energy_rows["candidates"]:  # (the balance's sizes, in the same scale)
                 if force_like(r["unit"]):
                     r["value"], r["std"] = r["value"] * k, None if r["std"] is None else r["std"] * k
