@@ -838,3 +838,26 @@ def test_an_integrating_servo_starts_where_a_sensor_offset_says_the_joint_is(tmp
     tiles = sh.tiles.of("fit")
     pred = sh.predict(system.spec.vector({"sensor_offset:pivot": offset})[None], sh.v0[None], tiles)["qpos"][0]
     assert np.abs(pred - sh.signals["qpos"][tiles]).max() < 0.1 * offset
+
+
+def test_a_hinge_angle_logged_wrapped_into_one_turn_is_unwrapped(tmp_path):
+    """A pendulum spinning over the top, logged in (-pi, pi] as encoders and ``joint_states`` do:
+    the model-order positions are continuous, and the note names the column; a jump that is not a
+    whole turn (a glitch) is left as it is."""
+    from sim2real.sysid.trajectory import ModelColumns
+
+    m = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, "pendulum.xml"))
+    t = np.arange(300) * 0.01
+    angle = 12.0 * t                                             # 12 rad/s: 0.12 rad per sample
+    path = str(tmp_path / "spin.csv")
+    save_csv(path, t, {"qpos:hinge": np.arctan2(np.sin(angle), np.cos(angle)), "ctrl:motor": 0 * t})
+    cols = ModelColumns(m, "pendulum.xml")
+    qpos = cols.arrays(load(path, m))[0]
+    np.testing.assert_allclose(qpos[:, 0], angle, atol=1e-6)
+    assert cols.notes == ["spin: qpos:hinge wraps around a turn (6 jumps of 2 pi): unwrapped"]
+    glitch = 0.3 * np.sin(t)
+    glitch[100] += 4.0
+    save_csv(path, t, {"qpos:hinge": glitch, "ctrl:motor": 0 * t})
+    cols = ModelColumns(m, "pendulum.xml")
+    np.testing.assert_array_equal(cols.arrays(load(path, m))[0][:, 0], load(path, m).get("qpos", "hinge"))
+    assert cols.notes == []

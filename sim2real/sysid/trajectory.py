@@ -182,6 +182,8 @@ class ModelColumns:
         self.nv = int(m.nv)
         self.dofadr = np.asarray(m.jnt_dofadr).copy()
         self.qpos_names, self.dof_names, self.quats, same_q, same_v = [], [], [], [], []
+        self.hinges = [int(m.jnt_qposadr[j]) for j in range(m.njnt) if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]
+        self.notes: list[str] = []  # what ``arrays`` did to the data (a wrapped angle unwrapped)
         for j, name in enumerate(self.joints):
             t, qa, da = int(m.jnt_type[j]), int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
             if t in _COORDS:
@@ -211,10 +213,22 @@ class ModelColumns:
     def arrays(self, rec):
         """Recording -> ``(qpos [T, nq], ctrl [T, nu], force [T, nu] or None, qfrc [T, nv])`` in model
         order. Quaternions are normalised and their signs made continuous (``q`` and ``-q`` are
-        one orientation; a logger may switch between them)."""
+        one orientation; a logger may switch between them). A hinge angle logged wrapped into one
+        turn (an encoder's or ``joint_states``' +-pi) is unwrapped where every jump over pi is one
+        of a whole turn, within 1 rad: a pendulum spinning over the top read as jumps of 2 pi was
+        diagnosed `none` at a held-out NRMSE of 0.67 (``notes`` says where it was done)."""
         self.check_recording_covers(rec)
         T = len(rec)
         qpos = np.stack([rec.get("qpos", j) for j in self.qpos_names], -1)
+        for qa in self.hinges:
+            jumps = np.abs(np.diff(qpos[:, qa]))
+            big = jumps > np.pi
+            if big.any() and np.all(np.abs(jumps[big] - 2 * np.pi) < 1.0):
+                qpos[:, qa] = np.unwrap(qpos[:, qa])
+                note = (f"{rec.name}: qpos:{self.qpos_names[qa]} wraps around a turn ({int(big.sum())} jumps of 2 pi): "
+                        "unwrapped")
+                if note not in self.notes:
+                    self.notes.append(note)
         for qa, _ in self.quats:
             qpos[:, qa:qa + 4] = continuous_quaternions(qpos[:, qa:qa + 4], rec.path, self.qpos_names[qa])
         ctrl = (np.stack([rec.get("ctrl", a) for a in self.actuators], -1) if self.actuators

@@ -76,7 +76,8 @@ URDF = """<?xml version="1.0"?>
 </robot>"""
 
 # name: (model text, its suffix, the truth's attribute (or a function of the compiled model), the truth in words,
-#        the drive: "multisine" through ctrl, "torque" through qfrc_applied, "swing" released from rest)
+#        the drive: "multisine" through ctrl, "torque" through qfrc_applied, "swing" released from rest,
+#        "spin" launched over the top)
 PROBES = {
     "arm_cylinder_motor_friction": (ARM, "xml", 'frictionloss="0.3"', "coulomb_friction@elbow 0.3 N m", "multisine"),
     "tendon_rk4_damping": (TENDON, "xml", 'damping="0.08"', "viscous_damping@pivot 0.08 N m s/rad", "multisine"),
@@ -86,6 +87,8 @@ PROBES = {
                                 "viscous_damping@pivot 0.004 N m s/rad", "swing"),
     "urdf_qfrc_damping": (URDF, "urdf", lambda m: m.dof_damping.__setitem__(0, 0.004),
                           "viscous_damping@pivot 0.004 N m s/rad", "torque"),
+    "urdf_spinning_wrapped": (URDF, "urdf", lambda m: m.dof_damping.__setitem__(0, 0.004),
+                              "viscous_damping@pivot 0.004 N m s/rad (angle logged in (-pi, pi])", "spin"),
 }
 
 
@@ -106,6 +109,8 @@ def record(name, model_text, suffix, truth, drive, work):
         d = mujoco.MjData(m)
         if drive == "swing":
             d.qpos[0] = 1.0 + 0.3 * r
+        if drive == "spin":  # over the top, the angle logged wrapped as an encoder gives it
+            d.qvel[0] = 14.0 + r
         freqs, phases = rng.uniform(0.2, 3, (max(m.nu, 1), 5)), rng.uniform(0, 6.28, (max(m.nu, 1), 5))
         levels = rng.uniform(-3, 3, 60)
         cols = [f"qpos:{m.joint(j).name}" for j in range(m.njnt)]
@@ -124,7 +129,10 @@ def record(name, model_text, suffix, truth, drive, work):
             elif drive == "torque":
                 d.qfrc_applied[0] = 0.6 * np.sin(2 * np.pi * 0.5 * t + r) + 0.3 * np.sin(2 * np.pi * 1.7 * t)
             noise = 1e-4 if name.startswith("gripper") else 1e-3
-            rows.append([t + 3.0, *(d.qpos + rng.normal(0, noise, m.nq)), *d.ctrl,
+            q = d.qpos + rng.normal(0, noise, m.nq)
+            if drive == "spin":
+                q = np.arctan2(np.sin(q), np.cos(q))
+            rows.append([t + 3.0, *q, *d.ctrl,
                          *([d.qfrc_applied[0]] if drive == "torque" else [])])
             for _ in range(sub):
                 mujoco.mj_step(m, d)
