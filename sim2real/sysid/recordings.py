@@ -274,6 +274,23 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
         row = int(np.argmax(jitter)) + 1
         raise RecordingError(f"{path}: non-uniform sampling at data row {row + 1}: step {dt[row - 1]:.6g} s "
                              f"vs median {med:.6g} s (resample to a fixed rate first)")
+    # a limited joint's position far outside its range is in other units (a hinge logged in
+    # degrees reads +-150 against +-2.6 rad); the physics keeps a joint near its range, so a
+    # sample past it by more than the range's whole span is refused
+    for j in range(model.njnt):
+        name = model.joint(j).name
+        col = cols.get(f"qpos:{name}")
+        hinge = int(model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
+        if col is None or not model.jnt_limited[j] or not (hinge or int(model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            continue
+        lo, hi = (float(x) for x in model.jnt_range[j])
+        span = hi - lo
+        far = (col < lo - span) | (col > hi + span)
+        if far.any():
+            row = int(np.argmax(far))
+            raise RecordingError(f"{path}: column 'qpos:{name}' reads {col[row]:.6g} at data row {row + 1}, beyond the "
+                                 f"joint's range [{lo:.4g}, {hi:.4g}] by more than its span: positions must be in "
+                                 + ("rad (degrees?)" if hinge else "m (millimetres?)"))
     steps = med / model.opt.timestep
     if med > MAX_PERIOD_S or steps > MAX_STEPS_PER_SAMPLE:
         raise RecordingError(f"{path}: column 'time': the samples are {med:.6g} s apart ({steps:.0f} of the model's "
