@@ -334,10 +334,10 @@ def at_nominal_masses(system: System, fitter: Fitter, model, tiles, tol: float =
         return model, None
     k = float(np.exp(np.mean([np.log(spec[n].default / z[spec.index(n)]) for n in masses])))
     scaled = np.array([force_like(p.unit) for p in spec.params])
-    z_new = np.clip(np.where(scaled, z * k, z), spec.low, spec.high)
     if abs(np.log(k)) < 1e-3:
         k, z_new = 1.0, z
     else:
+        z_new = np.clip(np.where(scaled, z * k, z), spec.low, spec.high)
         r = fitter.residuals(np.stack([z, z_new]), np.repeat(model.result.v0[None], 2, 0), tiles)
         sse = np.sum(r.reshape(2, -1) ** 2, axis=1)
         if not sse[1] <= sse[0] * (1 + tol):

@@ -277,12 +277,13 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
     # a limited joint's position far outside its range is in other units (a hinge logged in
     # degrees reads +-150 against +-2.6 rad); the physics keeps a joint near its range, so a
     # sample past it by more than the range's whole span is refused
+    hinge_or_slide = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
     for j in range(model.njnt):
         name = model.joint(j).name
         col = cols.get(f"qpos:{name}")
-        hinge = int(model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
-        if col is None or not model.jnt_limited[j] or not (hinge or int(model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_SLIDE)):
+        if col is None or not model.jnt_limited[j] or int(model.jnt_type[j]) not in hinge_or_slide:
             continue
+        hinge = int(model.jnt_type[j]) == hinge_or_slide[0]
         lo, hi = (float(x) for x in model.jnt_range[j])
         span = hi - lo
         far = (col < lo - span) | (col > hi + span)

@@ -182,7 +182,7 @@ class ModelColumns:
         self.nv = int(m.nv)
         self.dofadr = np.asarray(m.jnt_dofadr).copy()
         self.qpos_names, self.dof_names, self.quats, same_q, same_v = [], [], [], [], []
-        self.hinges = [int(m.jnt_qposadr[j]) for j in range(m.njnt) if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]
+        self.hinges = []  # qpos addresses of the hinges (an angle logged wrapped is unwrapped: ``arrays``)
         self.notes: list[str] = []  # what ``arrays`` did to the data (a wrapped angle unwrapped)
         for j, name in enumerate(self.joints):
             t, qa, da = int(m.jnt_type[j]), int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
@@ -199,6 +199,8 @@ class ModelColumns:
                 self.dof_names.append(name)
                 same_q.append(qa)
                 same_v.append(da)
+                if t == int(mujoco.mjtJoint.mjJNT_HINGE):
+                    self.hinges.append(qa)
         self.same_q, self.same_v = np.array(same_q, int), np.array(same_v, int)
 
     def check_recording_covers(self, rec) -> None:
