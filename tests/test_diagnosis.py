@@ -209,6 +209,29 @@ def test_the_heldout_walk_judges_the_typical_segment_too():
     assert _typical_ratio(seg[1], seg[2]) == pytest.approx(0.2)
 
 
+def test_a_signal_held_within_its_noise_does_not_rule_the_pooled_heldout_error():
+    """An arm's shoulder and elbow swing while a stiff servo holds its wrist within its 1e-3 rad
+    noise (``second_wave.py``'s ``arm_held_wrist_friction``: a shoulder friction lowered the
+    moving joints' errors by a third and the pooled one by 0.1%, and was not named). The wrist
+    is left out of the pooled NRMSE and of the segments' errors; all still: all pooled."""
+    from sim2real.sysid.diagnose import _pooled, _segment_errors, still_signals
+
+    rng = np.random.default_rng(0)
+    meas = np.stack([np.sin(np.linspace(0, 20, 400)), np.cos(np.linspace(0, 20, 400)),
+                     rng.normal(0, 1e-3, 400)], -1).reshape(40, 10, 3)   # [segments, H, signals]
+    sh = types.SimpleNamespace(signals={"qpos": meas}, noise={"qpos": np.full(3, 1e-3)}, qvel_cols=None,
+                               sys=types.SimpleNamespace(qpos_names=["shoulder", "elbow", "wrist"], actuators=[]))
+    tiles = np.arange(40)
+    assert still_signals(sh, tiles) == ["qpos:wrist"]
+    nr = {"qpos:shoulder": 0.002, "qpos:elbow": 0.004, "qpos:wrist": 1.0}
+    assert _pooled(sh, tiles, nr) == pytest.approx(0.003)
+    pred = {"qpos": (meas + 0.01)[None], "ok": np.ones((1, 40, 10), bool)}
+    seg = _segment_errors(sh, [(nr, pred)], tiles)   # the wrist's error is 10x its spread: not in it
+    assert seg.shape == (1, 40) and seg.max() < 0.02
+    sh.signals = {"qpos": meas * 1e-6}
+    assert still_signals(sh, tiles) == [] and _pooled(sh, tiles, nr) == pytest.approx(np.mean(list(nr.values())))
+
+
 def test_noise_estimate_gaussian_and_quantised():
     rng = np.random.default_rng(0)
     t = np.arange(4000) * 0.002

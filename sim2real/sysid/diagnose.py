@@ -38,7 +38,7 @@ from sim2real.sysid.recordings import RecordingError, check_sample_rate, load_al
 from sim2real.sysid.select import FAR_MASS, TIMING, Model, SelectConfig, Selector, is_far_mass
 from sim2real.sysid.shooting import Shooting
 from sim2real.sysid.system import System
-from sim2real.sysid.trajectory import from_recording, quantisation_noise, signal_scale
+from sim2real.sysid.trajectory import from_recording, moves, quantisation_noise, signal_scale
 
 
 @dataclasses.dataclass(frozen=True)
@@ -694,6 +694,12 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         bar.step(text=f"compiling the simulator ({sh.S} segments of {H} samples)")
         z0 = spec.default.copy()
         check_tiles = sh.tiles.of("heldout") if held else sh.tiles.of("val")
+        still = still_signals(sh, check_tiles)
+        if still:
+            system.notes.append(f"{', '.join(still)} moved no more than the noise on the check data "
+                                f"({'held-out recordings' if held else 'validation tails'}): left out of the pooled "
+                                "held-out error (any model's NRMSE there is about 1, and would rule the mean); "
+                                "`fit.per_signal` still lists it")
         all_train = np.concatenate([sh.tiles.of("fit"), sh.tiles.of("val")])
         pred0 = sh.predict(z0[None], fitter.v_hat[None], all_train)
         force0 = pred0["force"][0]  # [..., nu]; nu may be 0 (a free swing), so no reshape(-1, 0)
@@ -733,7 +739,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         final, steps = sel.run()
         bar.step(text="checking on held-out data")
         checked = _nrmse(sh, fitter, [z0] + [M.z for M in steps], check_tiles)
-        scores = [float(np.mean(list(nr.values()))) for nr, _ in checked]
+        scores = [_pooled(sh, check_tiles, nr) for nr, _ in checked]
         nominal_ho, step_ho = scores[0], scores[1:]
         seg = _segment_errors(sh, checked, check_tiles)  # [1 + steps, segments]
         keep = heldout_walk(step_ho, nominal_ho, seg[1:], [_pair_at(sel, steps, k) for k in range(len(steps))], cfg)
@@ -749,7 +755,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             steps = steps[: keep + 1] + [M2]
             checked = checked[: keep + 2] + [nr2]
             seg = np.concatenate([seg[: keep + 2], _segment_errors(sh, [nr2], check_tiles)])
-            step_ho = step_ho[: keep + 1] + [float(np.mean(list(nr2[0].values())))]
+            step_ho = step_ho[: keep + 1] + [_pooled(sh, check_tiles, nr2[0])]
             keep += 1
             chosen = M2
             refit_worse = False  # (the new model's re-fit part is the nominal one where the re-fit was not kept)
@@ -896,7 +902,7 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, refit, trajs, n_train, he
         res = dataclasses.replace(res, std={**res.std, c.params[0]: f.std})
         models.append(Model(list(chosen.effects) + [c], res, None, names + [c.params[0]]))
     checked = _nrmse(sh, fitter, [M.z for M in models], check_tiles)
-    scores = [float(np.mean(list(nr.values()))) for nr, _ in checked]
+    scores = [_pooled(sh, check_tiles, nr) for nr, _ in checked]
     for f, ho in zip(passing, scores):
         row[f.candidate.label]["heldout_nrmse"] = ho
     base = Model(list(chosen.effects), dataclasses.replace(chosen.result, z=z_base), None, list(chosen.params))
@@ -959,12 +965,32 @@ def _signal_errors(sh: Shooting, pred: dict, tiles):
             yield nm, np.where(ok[..., k], e[..., k], 0.0), float(np.std(meas[tiles][..., k])) or 1e-12
 
 
+def still_signals(sh: Shooting, tiles) -> list[str]:
+    """The signals that do not move beyond their noise over ``tiles`` (``trajectory.moves``):
+    their NRMSE is about noise over spread, near 1, for any model, and a mean over signals would
+    be ruled by it (an arm whose held wrist sat at its 1e-3 rad noise: a shoulder friction that
+    lowered the moving joints' errors by a third lowered the pooled one by 0.1%, and was not
+    named). Empty where every signal is still (nothing else to pool)."""
+    names = _signal_names(sh)
+    still = [nm for key, meas in sh.signals.items() for nm, n, spread in
+             zip(names[key], sh.noise[key], np.std(meas[tiles], axis=(0, 1))) if not moves(n, spread)]
+    return [] if len(still) == sum(len(v) for v in names.values()) else still
+
+
+def _pooled(sh: Shooting, tiles, nr: dict) -> float:
+    """The held-out NRMSE of one model: the mean of ``nr``'s per-signal NRMSEs (``_nrmse``) over
+    the signals that move (``still_signals``)."""
+    still = still_signals(sh, tiles)
+    return float(np.mean([v for k, v in nr.items() if k not in still]))
+
+
 def _segment_errors(sh: Shooting, checked, tiles) -> np.ndarray:
     """``[models, segments]``: each segment's prediction error of each model of ``checked``
     (``_nrmse``'s output): per signal the segment's RMS error over the signal's spread, as
-    ``_nrmse`` pools them, averaged over the signals."""
-    return np.array([np.mean([np.sqrt(np.mean(e ** 2, axis=1)) / std for _, e, std in _signal_errors(sh, pred, tiles)],
-                             axis=0) for _, pred in checked])
+    ``_pooled`` pools them, averaged over the signals that move."""
+    still = still_signals(sh, tiles)
+    return np.array([np.mean([np.sqrt(np.mean(e ** 2, axis=1)) / std for nm, e, std in _signal_errors(sh, pred, tiles)
+                              if nm not in still], axis=0) for _, pred in checked])
 
 
 def _typical_ratio(before: np.ndarray, after: np.ndarray) -> float:
@@ -1173,7 +1199,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
             " + ".join(f"{w:+.2f} {n}" for n, w in u.items()) for u in unidentified))
     # before / after on the check segments
     (nr_b, pred_b), (nr_a, pred_a) = check_before, check_after
-    before, after = float(np.mean(list(nr_b.values()))), float(np.mean(list(nr_a.values())))
+    before, after = _pooled(sh, check_tiles, nr_b), _pooled(sh, check_tiles, nr_a)
     fit = {"metric": f"{sh.H * trajs[0].dt:.3g} s predictions from measured states (initial velocities refined)",
            "recordings": [r.name for r in held] if held else [f"{r.name} (last {100 * cfg.val_fraction:g}%)" for r in train],
            "before": before, "after": after, "reduction": 1 - after / max(before, 1e-300),

@@ -31,7 +31,7 @@ from sim2real.envs import parallel
 from sim2real.physics import stepper
 from sim2real.physics.params import clip
 from sim2real.sysid.derivatives import velocity_state
-from sim2real.sysid.trajectory import SPREAD_FLOOR, kink_error, signal_scale, start_velocity
+from sim2real.sysid.trajectory import SPREAD_FLOOR, kink_error, moves, signal_scale, start_velocity
 
 B = 8  # physics vectors per call
 
@@ -123,26 +123,28 @@ class Shooting:
         idx = self.tiles.start[:, None] + 1 + np.arange(H)[None]
         self.signals = {"qpos": q_all[idx]}
         scale = {"qpos": signal_scale([tr.sigma_q for tr in trajs], q_all, floor, system.angles)}
+        # each signal's noise std, the largest of the recordings' (``[n]`` per kind, as ``signal_scale``)
+        self.noise = {"qpos": np.max([tr.sigma_q for tr in trajs], 0)}
         # the measured velocity columns compared (None: the recordings have none) and those left out
         self.qvel_cols, self.left_out = None, []
         if all(tr.qvel is not None for tr in trajs):
             qv = cat(lambda tr: tr.qvel)
             # a measured velocity whose noise is as large as what it measures (an encoder's count
-            # differenced at a fast rate: noise at least 1/sqrt(2) of the column's spread, so the
-            # motion's own spread is below its noise) tells little about the motion, and weighted
-            # in it adds about one per residual to every model: every relative measure (a gain, a
-            # screen score, the held-out NRMSE) is diluted towards nothing. It is not compared.
+            # differenced at a fast rate) tells little about the motion, and weighted in, it adds
+            # about one per residual to every model (``moves``): it is not compared.
             noise = np.max([tr.sigma_qvel for tr in trajs], 0)
-            keep = noise < np.std(qv, 0) / np.sqrt(2)
+            keep = moves(noise, np.std(qv, 0))
             self.left_out = [f"qvel:{system.dof_names[k]}" for k in np.where(~keep)[0]]
             self.qvel_cols = np.where(keep)[0]
             if keep.any():
                 self.signals["qvel"] = qv[idx][..., keep]
                 scale["qvel"] = signal_scale([tr.sigma_qvel[keep] for tr in trajs], qv[:, keep], floor)
+                self.noise["qvel"] = noise[keep]
         if m.nu and all(tr.force is not None for tr in trajs):
             fo = cat(lambda tr: tr.force)
             self.signals["force"] = fo[idx]
             scale["force"] = signal_scale([tr.sigma_force for tr in trajs], fo, floor)
+            self.noise["force"] = np.max([tr.sigma_force for tr in trajs], 0)
         self.scale = {k: np.maximum(v, 1e-12) for k, v in scale.items()}
         # the measured state at every segment start
         st = self.tiles.start

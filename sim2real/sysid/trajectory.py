@@ -103,6 +103,15 @@ def signal_scale(sigmas, values: np.ndarray, floor: float = SPREAD_FLOOR, angles
     return np.sqrt(np.max(sigmas, 0) ** 2 + (floor * spread) ** 2)
 
 
+def moves(noise, spread):
+    """Whether a signal moves beyond its noise (elementwise over ``[n]`` noise stds and spreads):
+    its motion's own variance (``spread^2 - noise^2``) exceeds the noise's. A signal that does
+    not (an encoder's count differenced at a fast rate; a joint held still by a stiff servo) has
+    an error of about its noise for any model, and pooled with the others (a weight per residual,
+    an NRMSE per signal) it dilutes every relative measure towards nothing."""
+    return np.asarray(noise) < np.asarray(spread) / np.sqrt(2)
+
+
 def noise_std(x: np.ndarray) -> np.ndarray:
     """Per column of ``x [T, n]``: the std of white measurement noise on a smooth signal.
 
