@@ -861,3 +861,36 @@ def test_a_hinge_angle_logged_wrapped_into_one_turn_is_unwrapped(tmp_path):
     cols = ModelColumns(m, "pendulum.xml")
     np.testing.assert_array_equal(cols.arrays(load(path, m))[0][:, 0], load(path, m).get("qpos", "hinge"))
     assert cols.notes == []
+
+
+def test_jittered_time_stamps_are_resampled_onto_the_median_grid(tmp_path):
+    """A logger whose samples are taken up to a fifth of a step off their instants (ROS
+    ``joint_states``), stamped when taken, with one sample lost: the recording comes back on the
+    median step's grid, positions interpolated (to the motion's curvature), each command the
+    nearest row's, a wrapped spinning angle still whole turns for ``ModelColumns`` to unwrap, and
+    a note; stamps within 1% are kept as they are; a gap of more than 3 steps is refused."""
+    from sim2real.sysid.trajectory import ModelColumns
+
+    m = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, "pendulum.xml"))
+    rng = np.random.default_rng(0)
+    k = np.delete(np.arange(400), 150)                            # sample 150 lost
+    t = 2.0 + 0.005 * (k + rng.uniform(-0.2, 0.2, len(k)))
+    angle = 12.0 * t + np.sin(3 * t)
+    cmd = np.sign(np.sin(7 * k))                                  # a command per loop instant
+    path = str(tmp_path / "jitter.csv")
+    save_csv(path, t, {"qpos:hinge": np.arctan2(np.sin(angle), np.cos(angle)), "ctrl:motor": cmd})
+    rec = load(path, m)
+    grid = 2.0 + 0.005 * np.arange(400)
+    assert rec.dt == pytest.approx(0.005, rel=1e-3) and len(rec) == 400
+    np.testing.assert_allclose(rec.time, grid, atol=0.0006)   # (the grid fitted to the stamps)
+    cols = ModelColumns(m, "pendulum.xml")
+    qpos = cols.arrays(rec)[0][:, 0]
+    np.testing.assert_allclose(qpos - qpos[0], 12.0 * rec.time + np.sin(3 * rec.time) - angle[0], atol=2e-3)
+    np.testing.assert_array_equal(np.delete(rec.get("ctrl", "motor"), 150), cmd)
+    assert "resampled onto it" in rec.notes[0] and cols.notes
+    save_csv(path, 0.005 * (np.arange(400) + 0.005 * rng.uniform(-1, 1, 400)), {"qpos:hinge": 0 * grid,
+                                                                                "ctrl:motor": 0 * grid})
+    assert load(path, m).notes == []
+    save_csv(path, np.delete(grid, range(150, 154)), {"qpos:hinge": np.zeros(396), "ctrl:motor": np.zeros(396)})
+    with pytest.raises(RecordingError, match="non-uniform sampling at data row 151.*samples lost"):
+        load(path, m)

@@ -618,7 +618,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
             system.check_recording_covers(r)
         window = int(round(cfg.window_seconds / dt)) | 1 if cfg.window_seconds > 0 else None
         trajs = [from_recording(r, system, window) for r in train + held]
-        system.notes += system.columns.notes  # (what reading them did: a wrapped angle unwrapped)
+        # (what reading them did: jittered stamps resampled, a wrapped angle unwrapped)
+        system.notes += [n for r in train + held for n in r.notes] + system.columns.notes
         rough_any = False
         for i, r in enumerate(train + held):  # motion rougher than the noise estimate follows
             rough = rough_motion_noise(system, trajs[i])

@@ -34,6 +34,10 @@ _TARGET = {"qpos": "joint", "qvel": "joint", "qfrc": "joint", "ctrl": "actuator"
 # for minutes without a word; no rigid-body dynamics is identified from samples this far apart.
 MAX_PERIOD_S = 0.5
 MAX_STEPS_PER_SAMPLE = 1000
+# Time stamps further than UNIFORM of a step from the median step's grid are resampled onto it
+# (``resample``); a step longer than MAX_GAP median steps (samples lost) is refused.
+UNIFORM = 0.01
+MAX_GAP = 3.0
 
 
 class RecordingError(ValueError):
@@ -53,6 +57,7 @@ class Recording:
     path: str
     time: np.ndarray
     columns: dict[str, np.ndarray]
+    notes: list[str] = dataclasses.field(default_factory=list)  # what loading did to the data
 
     @property
     def name(self) -> str:
@@ -267,13 +272,10 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
         row = int(np.argmax(dt < 0)) + 1
         raise RecordingError(f"{path}: time goes backwards at data row {row + 1} ({t[row]} -> {t[row + 1]})")
     med = np.median(dt)
-    jitter = np.abs(dt - med) / med
-    # a logger's clock jitters (DFKI's pendulum: one step 6% long in 8000); the samples are taken
-    # as uniform at the median step up to a quarter of a step, a missing sample or more is refused
-    if jitter.max() > 0.25:
-        row = int(np.argmax(jitter)) + 1
+    if dt.max() > MAX_GAP * med:
+        row = int(np.argmax(dt)) + 1
         raise RecordingError(f"{path}: non-uniform sampling at data row {row + 1}: step {dt[row - 1]:.6g} s "
-                             f"vs median {med:.6g} s (resample to a fixed rate first)")
+                             f"vs median {med:.6g} s (samples lost: cut the recording there, or resample it)")
     # a limited joint's position far outside its range is in other units (a hinge logged in
     # degrees reads +-150 against +-2.6 rad); the physics keeps a joint near its range, so a
     # sample past it by more than the range's whole span is refused
@@ -298,7 +300,64 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
                              f"{model.opt.timestep:g} s physics steps; at most {MAX_PERIOD_S:g} s and "
                              f"{MAX_STEPS_PER_SAMPLE} steps): time must be in seconds (milliseconds: divide by 1000; "
                              f"nanosecond stamps: by 1e9)")
-    return Recording(path, t, cols)
+    rec = Recording(path, t, cols)
+    step, off = _grid(t)
+    return resample(rec, model, step, off) if np.abs(off).max() > UNIFORM * step else rec
+
+
+def _grid(t: np.ndarray) -> tuple[float, np.ndarray]:
+    """The uniform grid that fits the stamps ``t [T]``: its step (s), and how far each stamp lies
+    off it ``[T]`` (s). The step is the span over the whole steps in it (each stamp's distance to
+    the next, in median steps, rounded): a median of jittered steps is 1% off, which over
+    hundreds of samples puts the grid steps away from the stamps; a lost sample counts as two
+    steps. The grid's origin is the median one, so a first stamp taken late shifts nothing."""
+    dt = np.diff(t)
+    k = np.concatenate([[0], np.cumsum(np.maximum(np.round(dt / np.median(dt)), 1))])
+    step = (t[-1] - t[0]) / k[-1]
+    dev = t - t[0] - step * k
+    return float(step), dev - np.median(dev)
+
+
+def resample(rec: Recording, model: mujoco.MjModel, step: float, off: np.ndarray) -> Recording:
+    """``rec`` on the uniform grid of ``step`` (s) its stamps lie ``off [T]`` (s) of (``_grid``).
+
+    A logger's clock jitters (ROS ``joint_states``: a fifth of a step; DFKI's pendulum: one step
+    6% long in 8000), and a sample taken off its instant but read as on it is off by the motion
+    in between. Measured signals (positions, velocities, forces) are interpolated linearly
+    between the stamps (a line through 50 rad/s^2 at 200 Hz errs by 2e-4 rad); a command is the
+    one of the row nearest each instant (a loop sends it when it samples: holding the previous
+    one until a late stamp would delay it by a sample now and then). A hinge angle wrapped into
+    one turn and an orientation quaternion are made continuous first, so no sample is
+    interpolated across a wrap or a sign flip (the angle is wrapped back: ``ModelColumns``
+    unwraps it, with its note).
+    """
+    from sim2real.sysid.trajectory import ModelColumns, continuous_quaternions
+
+    t = rec.time
+    start = t[0] - off[0]   # (the grid's instant nearest the first stamp)
+    grid = start + step * np.arange(int(np.round((t[-1] - off[-1] - start) / step)) + 1)
+    # (the row whose stamp is nearest each instant: rows are stamped near their own instants)
+    nearest = np.clip(np.searchsorted(t, grid), 1, len(t) - 1)
+    nearest -= (grid - t[nearest - 1]) < (t[nearest] - grid)
+    cols = dict(rec.columns)
+    mc = ModelColumns(model, rec.path)
+    for qa, _ in mc.quats:
+        names = [f"qpos:{mc.qpos_names[qa + i]}" for i in range(4)]
+        if all(n in cols for n in names):
+            q = continuous_quaternions(np.stack([cols[n] for n in names], -1), rec.path, mc.qpos_names[qa])
+            cols.update({n: q[:, i] for i, n in enumerate(names)})
+    hinges = {f"qpos:{mc.qpos_names[qa]}" for qa in mc.hinges}
+    out = {}
+    for name, v in cols.items():
+        if name.startswith("ctrl:"):
+            out[name] = v[nearest]
+            continue
+        wrapped = name in hinges and np.abs(np.diff(v)).max() > np.pi
+        x = np.interp(grid, t, np.unwrap(v) if wrapped else v)
+        out[name] = np.angle(np.exp(1j * x)) if wrapped else x
+    return Recording(rec.path, grid, out, rec.notes + [
+        f"{rec.name}: time stamps up to {np.abs(off).max() / step:.0%} of a step off the {step:.6g} s grid: resampled onto it "
+        "(measurements interpolated, each command taken from the row nearest its instant)"])
 
 
 def check_sample_rate(recs, dt: float, reference: str) -> None:
