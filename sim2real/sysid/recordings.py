@@ -34,8 +34,8 @@ _TARGET = {"qpos": "joint", "qvel": "joint", "qfrc": "joint", "ctrl": "actuator"
 # for minutes without a word; no rigid-body dynamics is identified from samples this far apart.
 MAX_PERIOD_S = 0.5
 MAX_STEPS_PER_SAMPLE = 1000
-# Time stamps further than UNIFORM of a step from the median step's grid are resampled onto it
-# (``resample``); a step longer than MAX_GAP median steps (samples lost) is refused.
+# Time stamps further than UNIFORM of a step off the uniform grid that fits them are resampled onto
+# it (``_grid``, ``resample``); a step longer than MAX_GAP median steps (samples lost) is refused.
 UNIFORM = 0.01
 MAX_GAP = 3.0
 
