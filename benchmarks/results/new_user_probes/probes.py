@@ -142,26 +142,36 @@ def record(name, model_text, suffix, truth, drive, work):
 
 
 def main(work):
-    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
-
     os.makedirs(work, exist_ok=True)
     print("| probe | truth | named | values | held-out NRMSE before -> after | seconds |")
     print("|---|---|---|---|---|---|")
     for name, (text, suffix, truth, words, drive) in PROBES.items():
         nominal, paths = record(name, text, suffix, truth, drive, work)
+        diagnose_and_print(name, words, nominal, paths, work)
+
+
+def diagnose_and_print(name, words, nominal, paths, work):
+    """Diagnose a probe's model on its first two recordings, the third held out, and print its
+    table row (and write its notes beside the diagnosis); an error is printed as the answer."""
+    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
+
+    try:
         d = diagnose(DiagnoseConfig(model=nominal, recordings=tuple(paths[:2]), heldout=(paths[2],),
                                     out=os.path.join(work, name + "_diagnosis"), overwrite=True, plots=False,
                                     progress=False))
-        named = " + ".join(f"{s['effect']}@{s['target']}" if s["target"] else s["effect"] for s in d["selected"]) or d["answer"]
-        values = ", ".join(f"{k} {v:.4g}" for s in d["selected"] for k, v in s["params"].items()
-                           if not k.endswith(("_vel", "_r")) and k != "action_delay_seconds")
-        masses = ", ".join(f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g}" for n, r in d["nominal_refit"].items()
-                           if n.startswith("mass:"))
-        f = d["fit"]
-        print(f"| {name} | {words} | {named} | {values}; {masses} | {f['before']:.4g} -> {f['after']:.4g} | "
-              f"{d['seconds']} |", flush=True)
-        with open(os.path.join(work, name + "_notes.json"), "w") as fh:
-            json.dump(d["notes"], fh, indent=1)
+    except Exception as e:  # a probe is a user: what they would see is the finding
+        print(f"| {name} | {words} | error: {type(e).__name__}: {str(e)[:300]} | | | |", flush=True)
+        return
+    named = " + ".join(f"{s['effect']}@{s['target']}" if s["target"] else s["effect"] for s in d["selected"]) or d["answer"]
+    values = ", ".join(f"{k} {v:.4g}" for s in d["selected"] for k, v in s["params"].items()
+                       if not k.endswith(("_vel", "_r")))
+    masses = ", ".join(f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g}" for n, r in d["nominal_refit"].items()
+                       if n.startswith("mass:"))
+    f = d["fit"]
+    print(f"| {name} | {words} | {named} | {values}; {masses} | {f['before']:.4g} -> {f['after']:.4g} | "
+          f"{d['seconds']} |", flush=True)
+    with open(os.path.join(work, name + "_notes.json"), "w") as fh:
+        json.dump(d["notes"], fh, indent=1)
 
 
 if __name__ == "__main__":

@@ -6,12 +6,14 @@ angle), logs 3 recordings of 8 s with position noise 1e-3, and runs the diagnosi
 out the third. Prints one line per probe like ``probes.py``.
 ``PYTHONPATH=. python benchmarks/results/new_user_probes/second_wave.py [WORK] [PROBE ...]``.
 """
-import json
 import os
 import sys
 
 import mujoco
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from probes import diagnose_and_print  # noqa: E402  (the same table as the first wave's)
 
 FLYWHEEL = """<mujoco model="flywheel">
   <option timestep="0.001"/>
@@ -193,8 +195,6 @@ def record(name, text, truth, drive, extras, work):
 
 
 def main(work, only=()):
-    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
-
     os.makedirs(work, exist_ok=True)
     print("| probe | truth | named | values | held-out NRMSE before -> after | seconds |")
     print("|---|---|---|---|---|---|")
@@ -202,23 +202,7 @@ def main(work, only=()):
         if only and name not in only:
             continue
         nominal, paths = record(name, text, truth, drive, extras, work)
-        try:
-            d = diagnose(DiagnoseConfig(model=nominal, recordings=tuple(paths[:2]), heldout=(paths[2],),
-                                        out=os.path.join(work, name + "_diagnosis"), overwrite=True, plots=False,
-                                        progress=False))
-        except Exception as e:  # a probe is a user: what they would see is the finding
-            print(f"| {name} | {words} | error: {type(e).__name__}: {str(e)[:300]} | | | |", flush=True)
-            continue
-        named = " + ".join(f"{s['effect']}@{s['target']}" if s["target"] else s["effect"] for s in d["selected"]) or d["answer"]
-        values = ", ".join(f"{k} {v:.4g}" for s in d["selected"] for k, v in s["params"].items()
-                           if not k.endswith(("_vel", "_r")))
-        masses = ", ".join(f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g}" for n, r in d["nominal_refit"].items()
-                           if n.startswith("mass:"))
-        f = d["fit"]
-        print(f"| {name} | {words} | {named} | {values}; {masses} | {f['before']:.4g} -> {f['after']:.4g} | "
-              f"{d['seconds']} |", flush=True)
-        with open(os.path.join(work, name + "_notes.json"), "w") as fh:
-            json.dump(d["notes"], fh, indent=1)
+        diagnose_and_print(name, words, nominal, paths, work)
 
 
 if __name__ == "__main__":
