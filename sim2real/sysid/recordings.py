@@ -356,8 +356,8 @@ def resample(rec: Recording, model: mujoco.MjModel, step: float, off: np.ndarray
         x = np.interp(grid, t, np.unwrap(v) if wrapped else v)
         out[name] = np.angle(np.exp(1j * x)) if wrapped else x
     return Recording(rec.path, grid, out, rec.notes + [
-        f"{rec.name}: time stamps up to {np.abs(off).max() / step:.0%} of a step off the {step:.6g} s grid: resampled onto it "
-        "(measurements interpolated, each command taken from the row nearest its instant)"])
+        f"{rec.name}: time stamps up to {np.abs(off).max() / step:.0%} of a step off the {step:.6g} s grid: "
+        "resampled onto it (measurements interpolated, each command taken from the row nearest its instant)"])
 
 
 def check_sample_rate(recs, dt: float, reference: str) -> None:

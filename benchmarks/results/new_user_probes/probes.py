@@ -150,13 +150,14 @@ def main(work):
         diagnose_and_print(name, words, nominal, paths, work)
 
 
-def diagnose_and_print(name, words, nominal, paths, work):
-    """Diagnose a probe's model on its first two recordings, the third held out, and print its
-    table row (and write its notes beside the diagnosis); an error is printed as the answer."""
+def diagnose_and_print(name, words, nominal, paths, work, train=2):
+    """Diagnose a probe's model on its first ``train`` recordings, the rest held out (none: the
+    training recordings' tails), and print its table row (and write its notes beside the
+    diagnosis); an error is printed as the answer."""
     from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
 
     try:
-        d = diagnose(DiagnoseConfig(model=nominal, recordings=tuple(paths[:2]), heldout=(paths[2],),
+        d = diagnose(DiagnoseConfig(model=nominal, recordings=tuple(paths[:train]), heldout=tuple(paths[train:]),
                                     out=os.path.join(work, name + "_diagnosis"), overwrite=True, plots=False,
                                     progress=False))
     except Exception as e:  # a probe is a user: what they would see is the finding

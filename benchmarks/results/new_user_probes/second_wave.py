@@ -121,7 +121,9 @@ HELD_WRIST = SERVO_ARM.replace('timestep="0.002" integrator="implicit"', 'timest
 #   drive: "multisine" (ctrl), "steps" (random steps in ctrl), "swing" (released, no actuator);
 #   extras: delay_s (the command reaches the plant this late), offset (added to the logged angle),
 #   plant_dt (the true plant stepped at this, not the model's step), period (log period, s),
-#   jitter (each position sample taken up to this many physics steps off its instant, its time stamped so)
+#   jitter (each position sample taken up to this many physics steps off its instant, its time stamped so),
+#   lag_s (the command reaches the actuator through a first-order lag of this time constant),
+#   count, seconds (recordings and their length: 3 of 8 s)
 PROBES = {
     "flywheel_intvelocity_friction": (FLYWHEEL, 'frictionloss="0.05"', "coulomb_friction@spin 0.05 N m",
                                       "multisine", {}),
@@ -154,7 +156,7 @@ def record(name, text, truth, drive, extras, work):
     rng = np.random.default_rng(1)
     lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
     paths = []
-    for r in range(3):
+    for r in range(extras.get("count", 3)):
         d = mujoco.MjData(m)
         if drive == "swing":  # tilted and pushed sideways: a conical swing
             mujoco.mju_axisAngle2Quat(d.qpos[:4], np.array([1.0, 0.3, 0.0]) / np.hypot(1, 0.3), 0.6 + 0.2 * r)
@@ -170,7 +172,8 @@ def record(name, text, truth, drive, extras, work):
         queue = [np.zeros(m.nu)] * lag
         rows, qs = [], [d.qpos.copy()]  # qs: the state at every physics step (a jittered logger samples it)
         jit = np.random.default_rng(10 + r).integers(-extras.get("jitter", 0), extras.get("jitter", 0) + 1, 10 ** 5)
-        for k in range(int(8.0 / period)):
+        u_eff = np.zeros(m.nu)  # the command the actuator acts on: lagged at the plant's step (``lag_s``)
+        for k in range(int(extras.get("seconds", 8.0) / period)):
             t = k * period
             if drive == "multisine":
                 u = np.sin(2 * np.pi * freqs * t + phases).sum(1) / 2.5
@@ -182,7 +185,8 @@ def record(name, text, truth, drive, extras, work):
             rows.append([t + 1.5, *rng.normal(0, 1e-3, m.nq), *cmd])
             for _ in range(sub):
                 queue.append(cmd)
-                d.ctrl[:] = queue.pop(0)
+                u_eff = u_eff + (queue.pop(0) - u_eff) * (1 - np.exp(-m.opt.timestep / extras.get("lag_s", 1e-12)))
+                d.ctrl[:] = u_eff
                 mujoco.mj_step(m, d)
                 qs.append(d.qpos.copy())
         for k, row in enumerate(rows):  # the positions, each taken jit[k] physics steps off its instant
