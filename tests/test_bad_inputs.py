@@ -122,6 +122,10 @@ CASES = [
      {"limited.xml": open(PENDULUM).read().replace('limited="false"', 'range="-1.5 1.5"'),
       "r.csv": "time,qpos:hinge,ctrl:motor\n" + "".join(f"{k * 0.01:.2f},{60 * np.sin(k / 9):.6f},0.2\n" for k in range(60))},
      "column 'qpos:hinge' reads 6.6"),
+    ("range_read_as_degrees", "diagnose", ["model=limited.xml", "recordings=[r.csv]", "progress=false"],
+     {"limited.xml": open(PENDULUM).read().replace('limited="false"', 'range="-1.5 1.5"'),   # (no compiler: degrees)
+      "r.csv": "time,qpos:hinge,ctrl:motor\n" + "".join(f"{k * 0.01:.2f},{1.2 * np.sin(k / 9):.6f},0.2\n" for k in range(60))},
+     "range was written in radians"),
     ("time_in_milliseconds", "diagnose", D + ["recordings=[r.csv]"],
      {"r.csv": "time,qpos:hinge,ctrl:motor\n" + "".join(f"{k * 10},{0.1 * np.sin(k / 9):.6f},0.2\n" for k in range(60))},
      "column 'time': the samples are 10 s apart"),

@@ -1187,6 +1187,13 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     if refit_worse:
         notes.append("the nominal re-fit alone predicts the held-out data worse than the nominal model: the "
                      "nominal parameters are kept")
+    if system.mj.nu > 1 and "motor_lag_all" not in cfg.effects and any(c.effect == "action_delay" for c in chosen.effects):
+        # identical drives with one lag bend every command much as a delay does, and the shared
+        # lag is searched only when asked (by default it named false lags on the tuning lists:
+        # ``tuning.md`` step 59); a 2-link arm with a 30 ms lag on both motors was named a 27 ms
+        # delay (held-out 0.074 -> 0.0082), and asked, the shared lag 29.9 ms (-> 0.0024)
+        notes.append(f"an action delay on a model with {system.mj.nu} actuators: a first-order lag shared by identical "
+                     "drives acts much like it and is searched only when asked (`effects=[..., motor_lag_all]`)")
     for c in chosen.effects:
         if c.effect == "coulomb_friction" and f"coulomb_asym:{c.target}" in c.params:
             fc, a = float(z_fit[spec.index(f"coulomb:{c.target}")]), float(z_fit[spec.index(f"coulomb_asym:{c.target}")])

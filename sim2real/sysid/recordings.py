@@ -291,9 +291,16 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
         far = (col < lo - span) | (col > hi + span)
         if far.any():
             row = int(np.argmax(far))
+            # (or the model's range is the one in other units: MJCF angles are degrees unless the
+            # compiler says radians, so a range written in radians reads 57x too narrow)
+            d_lo, d_hi = np.degrees(lo), np.degrees(hi)
+            in_rad = hinge and np.all((col >= d_lo - (d_hi - d_lo)) & (col <= d_hi + (d_hi - d_lo)))
             raise RecordingError(f"{path}: column 'qpos:{name}' reads {col[row]:.6g} at data row {row + 1}, beyond the "
                                  f"joint's range [{lo:.4g}, {hi:.4g}] by more than its span: positions must be in "
-                                 + ("rad (degrees?)" if hinge else "m (millimetres?)"))
+                                 + ("rad (degrees?)" if hinge else "m (millimetres?)")
+                                 + (f"; or the model's range was written in radians ([{d_lo:.4g}, {d_hi:.4g}], which "
+                                    "the recording fits) and read as degrees: MuJoCo reads MJCF angles in degrees "
+                                    "unless <compiler angle=\"radian\"/>" if in_rad else ""))
     steps = med / model.opt.timestep
     if med > MAX_PERIOD_S or steps > MAX_STEPS_PER_SAMPLE:
         raise RecordingError(f"{path}: column 'time': the samples are {med:.6g} s apart ({steps:.0f} of the model's "
