@@ -150,16 +150,16 @@ def main(work):
         diagnose_and_print(name, words, nominal, paths, work)
 
 
-def diagnose_and_print(name, words, nominal, paths, work, train=2):
+def diagnose_and_print(name, words, nominal, paths, work, train=2, **options):
     """Diagnose a probe's model on its first ``train`` recordings, the rest held out (none: the
-    training recordings' tails), and print its table row (and write its notes beside the
-    diagnosis); an error is printed as the answer."""
+    training recordings' tails; ``options``: other ``DiagnoseConfig`` settings), and print its
+    table row (and write its notes beside the diagnosis); an error is printed as the answer."""
     from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
 
     try:
         d = diagnose(DiagnoseConfig(model=nominal, recordings=tuple(paths[:train]), heldout=tuple(paths[train:]),
                                     out=os.path.join(work, name + "_diagnosis"), overwrite=True, plots=False,
-                                    progress=False))
+                                    progress=False, **options))
     except Exception as e:  # a probe is a user: what they would see is the finding
         print(f"| {name} | {words} | error: {type(e).__name__}: {str(e)[:300]} | | | |", flush=True)
         return

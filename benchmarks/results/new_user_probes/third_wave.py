@@ -55,8 +55,10 @@ CARTPOLE = """<mujoco model="cartpole">
   <actuator><motor name="push" joint="slider" ctrlrange="-8 8"/></actuator>
 </mujoco>"""
 
-# a pusher on a position servo, a box on a rail resting on the floor: the box slides where the
-# pusher's pad meets it and rubs on the floor (MuJoCo's contact friction, the truth's is lower)
+# a pusher on a position servo, a box on a rail resting on the floor (free to lift, so its weight
+# presses on the floor: on the rail alone the joint carried it and nothing rubbed, the first
+# version's mistake): the pusher's pad shoves the box, which rubs on the floor (MuJoCo's contact
+# friction, the truth's lower)
 PUSHER = """<mujoco model="pusher">
   <option timestep="0.002"/>
   <worldbody>
@@ -67,6 +69,7 @@ PUSHER = """<mujoco model="pusher">
     </body>
     <body name="box" pos="0.1 0 0.05">
       <joint name="rail" type="slide" axis="1 0 0"/>
+      <joint name="lift" type="slide" axis="0 0 1"/>
       <geom name="box" type="box" size="0.05 0.05 0.05" mass="1" contype="3" conaffinity="3" {truth}/>
     </body>
   </worldbody>
@@ -112,6 +115,10 @@ def main(work, only=()):
             continue
         nominal, paths = record(name, text, truth, drive, extras, work)
         diagnose_and_print(name, words, nominal, paths, work, train)
+        if name == "arm_motor_lag":  # the same recordings, the shared lag asked for
+            from sim2real.sysid.diagnose import EFFECTS
+            diagnose_and_print(name + "_shared_asked", words, nominal, paths, work, train,
+                               effects=tuple(EFFECTS) + ("motor_lag_all",))
 
 
 if __name__ == "__main__":
