@@ -864,6 +864,42 @@ def test_a_stand_in_named_early_is_replaced_by_what_screens_best_in_its_place():
     assert M is steps[-1] and path is steps and not sel.refits
 
 
+def test_a_delay_named_on_several_actuators_is_replaced_by_their_shared_lag_where_that_passes():
+    """``SelectConfig.shared_lag`` (``third_wave.py``'s ``arm_motor_lag``: two motors lagging 30 ms
+    named a 27 ms delay): the lag shared by every actuator is fitted in place of the delay, and
+    replaces it beside the rest where it predicts the validation segments at a tenth of the
+    delay's error; where it predicts worse, the delay stays; a note either way."""
+    from sim2real.sysid.candidates import Candidate
+
+    F = Candidate("coulomb_friction", "j", ("coulomb:j",), ((0.1,),), (1.0,), ((0.0, 1.0),))
+    D = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+    S = Candidate("motor_lag_all", "", ("motor_lag_all",), ((0.01,),), (1.0,), ((0.0, 0.25),))
+    rng = np.random.default_rng(5)
+    base = 10 + rng.uniform(0, 1, 10)
+    fits = {frozenset(): (5000.0, base * 5), frozenset({F.label}): (3000.0, base * 3),
+            frozenset({F.label, D.label}): (1000.0, base),
+            frozenset({F.label, S.label}): (200.0, base * 0.1 * rng.uniform(0.9, 1.1, 10))}
+    sel, fit, _ = _pair_selector(fits, [F, D], lambda on: (S, 0.4, (0.02,)))
+
+    def try_(R, tr):
+        tr.model = fit(R.effects + [tr.candidate], 0, 0)
+        return tr
+
+    sel._try, sel.refits, sel.shared = try_, [], S
+    steps = [fit([], 0, 0), fit([F], 0, 0), fit([F, D], 0, 0)]
+    M, path = sel._shared_lag(steps[-1], steps)
+    assert [c.label for c in M.effects] == [F.label, S.label]
+    assert [S_.label for S_ in path] == ["none", F.label, f"{F.label} + {S.label}"]
+    assert "it replaced the delay" in sel.refits[0]
+    fits[frozenset({F.label, S.label})] = (1200.0, base * 1.3)
+    sel.refits = []
+    M, path = sel._shared_lag(steps[-1], steps)
+    assert M is steps[-1] and path is steps and "the delay kept" in sel.refits[0]
+    # no delay named: nothing is fitted
+    M, path = sel._shared_lag(steps[1], steps[:2])
+    assert M is steps[1] and len(sel.refits) == 1
+
+
 def test_a_backlash_beside_a_named_friction_is_fitted_whatever_its_screen_score():
     """``SelectConfig.geared``: once a Coulomb friction is named on a joint, the backlash on that
     joint's actuator joins the candidates fitted in the round (the screen's linearisation in the

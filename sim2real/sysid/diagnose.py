@@ -117,6 +117,8 @@ class DiagnoseConfig:
         screens best in its place, and replaced where that passes the test (``SelectConfig``).
       prune_fit: the backward check keeps an effect whose removal makes the fitted segments' error
         more than this many times higher, whatever the validation segments say (0: off; ``SelectConfig``).
+      shared_lag: a delay named on a model with several actuators is fitted again as one lag
+        shared by every actuator, which replaces it where that passes the test (``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
@@ -196,6 +198,7 @@ class DiagnoseConfig:
     timing_relative: bool = SelectConfig.timing_relative
     swap: bool = SelectConfig.swap
     prune_fit: float = SelectConfig.prune_fit
+    shared_lag: bool = SelectConfig.shared_lag
     refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
@@ -734,9 +737,9 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                     band_shown=cfg.band_shown, timing_restart=cfg.timing_restart,
                                     freeze_at_noise=freeze, pair_screen=cfg.pair_screen,
                                     timing_relative=cfg.timing_relative, swap=cfg.swap,
-                                    prune_fit=cfg.prune_fit),
+                                    prune_fit=cfg.prune_fit, shared_lag=cfg.shared_lag),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
-                       allowed=cfg.expressible or None)
+                       allowed=cfg.expressible or None, shared=_shared_lag(cfg, system, sc))
         final, steps = sel.run()
         bar.step(text="checking on held-out data")
         checked = _nrmse(sh, fitter, [z0] + [M.z for M in steps], check_tiles)
@@ -932,6 +935,16 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, refit, trajs, n_train, he
                         f" predict held-out data worse (best: {scores[order[0]]:.4g} against {ho_base:.4g}) or the "
                         "validation segments clearly worse")
     return info, None
+
+
+def _shared_lag(cfg: DiagnoseConfig, system: System, sc):
+    """The ``motor_lag_all`` candidate the selection fits in place of a named delay
+    (``SelectConfig.shared_lag``), or None: one actuator, searched anyway, or not expressible."""
+    if not cfg.shared_lag or system.mj.nu < 2 or "motor_lag_all" in cfg.effects:
+        return None
+    cands = [c for c in library(system, sc, ("motor_lag_all",))
+             if not cfg.expressible or set(c.params) <= set(cfg.expressible)]
+    return cands[0] if cands else None
 
 
 def _model_for_loading(path: str) -> mujoco.MjModel:
@@ -1187,13 +1200,6 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     if refit_worse:
         notes.append("the nominal re-fit alone predicts the held-out data worse than the nominal model: the "
                      "nominal parameters are kept")
-    if system.mj.nu > 1 and "motor_lag_all" not in cfg.effects and any(c.effect == "action_delay" for c in chosen.effects):
-        # identical drives with one lag bend every command much as a delay does, and the shared
-        # lag is searched only when asked (by default it named false lags on the tuning lists:
-        # ``tuning.md`` step 59); a 2-link arm with a 30 ms lag on both motors was named a 27 ms
-        # delay (held-out 0.074 -> 0.0082), and asked, the shared lag 29.9 ms (-> 0.0024)
-        notes.append(f"an action delay on a model with {system.mj.nu} actuators: a first-order lag shared by identical "
-                     "drives acts much like it and is searched only when asked (`effects=[..., motor_lag_all]`)")
     for c in chosen.effects:
         if c.effect == "coulomb_friction" and f"coulomb_asym:{c.target}" in c.params:
             fc, a = float(z_fit[spec.index(f"coulomb:{c.target}")]), float(z_fit[spec.index(f"coulomb_asym:{c.target}")])
