@@ -737,6 +737,14 @@ def test_a_pair_that_joined_together_is_judged_as_one_by_the_backward_check():
     assert M.effects == [] and "coulomb_friction@j + action_delay were dropped" in sel.pruned[0]
 
 
+def _fitted_on_top(fit):
+    """A stub of ``Selector._try``: the trial's candidate fitted on top of the model (``fit``)."""
+    def try_(R, tr):
+        tr.model = fit(R.effects + [tr.candidate], 0, 0)
+        return tr
+    return try_
+
+
 def _pair_selector(fits, cands, scored):
     """``_selector`` for ``Selector._pair``: its screen records ``(effects screened on, candidates
     screened)`` in the list returned and gives one trial, ``scored(effects on) -> (candidate,
@@ -847,11 +855,7 @@ def test_a_stand_in_named_early_is_replaced_by_what_screens_best_in_its_place():
     sel, fit, _ = _pair_selector(fits, [B, F, D], lambda on: (D, 0.5 if on == [F.label] else 0.001, (2.0,)))
     sel.cfg = dataclasses.replace(sel.cfg, swap=True)
 
-    def try_(R, tr):
-        tr.model = fit(R.effects + [tr.candidate], 0, 0)
-        return tr
-
-    sel._try, sel.refits = try_, []
+    sel._try, sel.refits = _fitted_on_top(fit), []
     steps = [fit([], 0, 0), fit([B], 0, 0), fit([B, F], 0, 0)]
     M, path = sel._swap(steps[-1], steps)
     assert [c.label for c in M.effects] == [F.label, D.label]
@@ -881,11 +885,7 @@ def test_a_delay_named_on_several_actuators_is_replaced_by_their_shared_lag_wher
             frozenset({F.label, S.label}): (200.0, base * 0.1 * rng.uniform(0.9, 1.1, 10))}
     sel, fit, _ = _pair_selector(fits, [F, D], lambda on: (S, 0.4, (0.02,)))
 
-    def try_(R, tr):
-        tr.model = fit(R.effects + [tr.candidate], 0, 0)
-        return tr
-
-    sel._try, sel.refits, sel.shared = try_, [], S
+    sel._try, sel.refits, sel.shared = _fitted_on_top(fit), [], S
     steps = [fit([], 0, 0), fit([F], 0, 0), fit([F, D], 0, 0)]
     M, path = sel._shared_lag(steps[-1], steps)
     assert [c.label for c in M.effects] == [F.label, S.label]
