@@ -17,7 +17,9 @@ Forward selection on the simulation error (``fit.py``):
    the validation error falls by ``min_gain`` (relative) and the per-segment differences are
    significant (paired t over the segments >= ``min_t``, ``Selector.judge``). Of those that pass,
    the one with the lowest error on the fitted and validation segments together joins the model.
-4. Repeat from 2 until nothing passes (or ``max_effects``).
+4. Repeat from 2 until nothing passes (or ``max_effects``). Then each named effect of a model
+   with two or more is tried replaced by what screens best in its place (``_swap``), and a
+   delay on a model with several actuators by one lag they share (``_shared_lag``).
 5. Backward check (``_prune``): each named effect must still pass the test against the model
    without it; the weakest that fails is dropped, until all pass.
 
