@@ -171,7 +171,8 @@ def record(name, text, truth, drive, extras, work):
         cols += [f"ctrl:{m.actuator(a).name}" for a in range(m.nu)]
         queue = [np.zeros(m.nu)] * lag
         rows, qs = [], [d.qpos.copy()]  # qs: the state at every physics step (a jittered logger samples it)
-        jit = np.random.default_rng(10 + r).integers(-extras.get("jitter", 0), extras.get("jitter", 0) + 1, 10 ** 5)
+        jit = np.random.default_rng(10 + r).integers(-extras.get("jitter", 0), extras.get("jitter", 0) + 1,
+                                                     int(extras.get("seconds", 8.0) / period) + 1)
         u_eff = np.zeros(m.nu)  # the command the actuator acts on: lagged at the plant's step (``lag_s``)
         for k in range(int(extras.get("seconds", 8.0) / period)):
             t = k * period
