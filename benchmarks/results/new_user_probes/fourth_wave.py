@@ -8,8 +8,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from probes import diagnose_and_print  # noqa: E402
-from second_wave import PENDULUM, record  # noqa: E402
+import third_wave  # noqa: E402  (its runner, the same table)
+from second_wave import PENDULUM  # noqa: E402
 
 # crank (driven), coupler and rocker, the loop closed where the coupler's end meets the rocker's
 FOURBAR = """<mujoco model="fourbar">
@@ -62,14 +62,7 @@ PROBES = {
 
 
 def main(work, only=()):
-    os.makedirs(work, exist_ok=True)
-    print("| probe | truth | named | values | held-out NRMSE before -> after | seconds |")
-    print("|---|---|---|---|---|---|")
-    for name, (text, truth, words, drive, extras, train) in PROBES.items():
-        if only and name not in only:
-            continue
-        nominal, paths = record(name, text, truth, drive, extras, work)
-        diagnose_and_print(name, words, nominal, paths, work, train)
+    third_wave.main(work, only, PROBES)
 
 
 if __name__ == "__main__":

@@ -106,11 +106,12 @@ PROBES = {
 }
 
 
-def main(work, only=()):
+def main(work, only=(), probes=None):
+    """Record and diagnose ``probes`` (this wave's by default; the fourth wave passes its own)."""
     os.makedirs(work, exist_ok=True)
     print("| probe | truth | named | values | held-out NRMSE before -> after | seconds |")
     print("|---|---|---|---|---|---|")
-    for name, (text, truth, words, drive, extras, train) in PROBES.items():
+    for name, (text, truth, words, drive, extras, train) in (PROBES if probes is None else probes).items():
         if only and name not in only:
             continue
         nominal, paths = record(name, text, truth, drive, extras, work)
