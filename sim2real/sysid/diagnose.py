@@ -938,9 +938,9 @@ def _energy_step(cfg, system, sel, sh, fitter, chosen, refit, trajs, n_train, he
 
 
 def _shared_lag(cfg: DiagnoseConfig, system: System, sc):
-    """The ``motor_lag_all`` candidate the selection fits in place of a named delay
-    (``SelectConfig.shared_lag``), or None: one actuator, searched anyway, or not expressible."""
-    if not cfg.shared_lag or system.mj.nu < 2 or "motor_lag_all" in cfg.effects:
+    """The ``motor_lag_all`` candidate the selection fits in place of a named delay (where
+    ``SelectConfig.shared_lag`` says so), or None: one actuator, searched anyway, or not expressible."""
+    if system.mj.nu < 2 or "motor_lag_all" in cfg.effects:
         return None
     cands = [c for c in library(system, sc, ("motor_lag_all",))
              if not cfg.expressible or set(c.params) <= set(cfg.expressible)]

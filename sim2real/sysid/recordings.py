@@ -334,11 +334,11 @@ def resample(rec: Recording, model: mujoco.MjModel, step: float, off: np.ndarray
     between the stamps (a line through 50 rad/s^2 at 200 Hz errs by 2e-4 rad); a command is the
     one of the row nearest each instant (a loop sends it when it samples: holding the previous
     one until a late stamp would delay it by a sample now and then). A hinge angle wrapped into
-    one turn and an orientation quaternion are made continuous first, so no sample is
-    interpolated across a wrap or a sign flip (the angle is wrapped back: ``ModelColumns``
-    unwraps it, with its note).
+    one turn (``trajectory.turn_jumps``) and an orientation quaternion are made continuous
+    first, so no sample is interpolated across a wrap or a sign flip (the angle is wrapped back:
+    ``ModelColumns`` unwraps it, with its note).
     """
-    from sim2real.sysid.trajectory import ModelColumns, continuous_quaternions
+    from sim2real.sysid.trajectory import ModelColumns, continuous_quaternions, turn_jumps
 
     t = rec.time
     start = t[0] - off[0]   # (the grid's instant nearest the first stamp)
@@ -359,7 +359,7 @@ def resample(rec: Recording, model: mujoco.MjModel, step: float, off: np.ndarray
         if name.startswith("ctrl:"):
             out[name] = v[nearest]
             continue
-        wrapped = name in hinges and np.abs(np.diff(v)).max() > np.pi
+        wrapped = name in hinges and turn_jumps(v) > 0
         x = np.interp(grid, t, np.unwrap(v) if wrapped else v)
         out[name] = np.angle(np.exp(1j * x)) if wrapped else x
     return Recording(rec.path, grid, out, rec.notes + [

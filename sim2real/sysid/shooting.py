@@ -122,9 +122,9 @@ class Shooting:
         # measured targets of every segment: samples start+1 .. start+H
         idx = self.tiles.start[:, None] + 1 + np.arange(H)[None]
         self.signals = {"qpos": q_all[idx]}
-        scale = {"qpos": signal_scale([tr.sigma_q for tr in trajs], q_all, floor, system.angles)}
-        # each signal's noise std, the largest of the recordings' (``[n]`` per kind, as ``signal_scale``)
+        # each signal's noise std, the largest of the recordings' (``[n]`` per kind), and its scale
         self.noise = {"qpos": np.max([tr.sigma_q for tr in trajs], 0)}
+        scale = {"qpos": signal_scale([self.noise["qpos"]], q_all, floor, system.angles)}
         # the measured velocity columns compared (None: the recordings have none) and those left out
         self.qvel_cols, self.left_out = None, []
         if all(tr.qvel is not None for tr in trajs):
@@ -138,13 +138,13 @@ class Shooting:
             self.qvel_cols = np.where(keep)[0]
             if keep.any():
                 self.signals["qvel"] = qv[idx][..., keep]
-                scale["qvel"] = signal_scale([tr.sigma_qvel[keep] for tr in trajs], qv[:, keep], floor)
                 self.noise["qvel"] = noise[keep]
+                scale["qvel"] = signal_scale([self.noise["qvel"]], qv[:, keep], floor)
         if m.nu and all(tr.force is not None for tr in trajs):
             fo = cat(lambda tr: tr.force)
             self.signals["force"] = fo[idx]
-            scale["force"] = signal_scale([tr.sigma_force for tr in trajs], fo, floor)
             self.noise["force"] = np.max([tr.sigma_force for tr in trajs], 0)
+            scale["force"] = signal_scale([self.noise["force"]], fo, floor)
         self.scale = {k: np.maximum(v, 1e-12) for k, v in scale.items()}
         # the measured state at every segment start
         st = self.tiles.start

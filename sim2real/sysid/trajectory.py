@@ -112,6 +112,15 @@ def moves(noise, spread):
     return np.asarray(noise) < np.asarray(spread) / np.sqrt(2)
 
 
+def turn_jumps(angle: np.ndarray) -> int:
+    """How many times an angle ``[T]`` (rad) logged wrapped into one turn (an encoder's or
+    ``joint_states``' +-pi) wraps: its jumps over pi, where every one is a whole turn within 1 rad;
+    0 where it has none, or where one is not (a glitch is not a wrap)."""
+    jumps = np.abs(np.diff(angle))
+    big = jumps > np.pi
+    return int(big.sum()) if big.any() and np.all(np.abs(jumps[big] - 2 * np.pi) < 1.0) else 0
+
+
 def noise_std(x: np.ndarray) -> np.ndarray:
     """Per column of ``x [T, n]``: the std of white measurement noise on a smooth signal.
 
@@ -232,12 +241,9 @@ class ModelColumns:
         T = len(rec)
         qpos = np.stack([rec.get("qpos", j) for j in self.qpos_names], -1)
         for qa in self.hinges:
-            jumps = np.abs(np.diff(qpos[:, qa]))
-            big = jumps > np.pi
-            if big.any() and np.all(np.abs(jumps[big] - 2 * np.pi) < 1.0):
+            if n := turn_jumps(qpos[:, qa]):
                 qpos[:, qa] = np.unwrap(qpos[:, qa])
-                note = (f"{rec.name}: qpos:{self.qpos_names[qa]} wraps around a turn ({int(big.sum())} jumps of 2 pi): "
-                        "unwrapped")
+                note = f"{rec.name}: qpos:{self.qpos_names[qa]} wraps around a turn ({n} jumps of 2 pi): unwrapped"
                 if note not in self.notes:
                     self.notes.append(note)
         for qa, _ in self.quats:
