@@ -126,6 +126,14 @@ CASES = [
      {"limited.xml": open(PENDULUM).read().replace('limited="false"', 'range="-1.5 1.5"'),   # (no compiler: degrees)
       "r.csv": "time,qpos:hinge,ctrl:motor\n" + "".join(f"{k * 0.01:.2f},{1.2 * np.sin(k / 9):.6f},0.2\n" for k in range(60))},
      "range was written in radians"),
+    ("velocity_in_degrees", "diagnose", D + ["recordings=[r.csv]"],
+     {"r.csv": "time,qpos:hinge,qvel:hinge,ctrl:motor\n" + "".join(
+         f"{k * 0.01:.2f},{0.5 * np.sin(2 * k * 0.01):.6f},{np.degrees(np.cos(2 * k * 0.01)):.6f},0.2\n" for k in range(400))},
+     "column 'qvel:hinge' integrates over the time column to 57.3x"),
+    ("stamps_on_another_clock", "diagnose", D + ["recordings=[r.csv]"],   # samples every 4 ms stamped 5 ms apart
+     {"r.csv": "time,qpos:hinge,qvel:hinge,ctrl:motor\n" + "".join(
+         f"{k * 0.005:.3f},{0.5 * np.sin(2 * k * 0.004):.6f},{np.cos(2 * k * 0.004):.6f},0.2\n" for k in range(1000))},
+     "spaced 1.25x the samples' true period"),
     ("time_in_milliseconds", "diagnose", D + ["recordings=[r.csv]"],
      {"r.csv": "time,qpos:hinge,ctrl:motor\n" + "".join(f"{k * 10},{0.1 * np.sin(k / 9):.6f},0.2\n" for k in range(60))},
      "column 'time': the samples are 10 s apart"),

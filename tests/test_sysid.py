@@ -744,6 +744,34 @@ def test_backlash_is_searched_on_an_integrating_servo_too(tmp_path):
         assert {g[k] for g in c.grid} >= {0.0} and 0 < c.search[k][0] < min(g[k] for g in c.grid if g[k] > 0)
 
 
+def test_a_declared_spring_is_searched_either_way_and_written_as_the_corrected_total(tmp_path):
+    """A joint declaring a spring gets the ``joint_stiffness`` hypothesis as a correction of it,
+    either sign, down to a total of 0 (withheld before: a pendulum declaring 2 N m/rad where the
+    plant had 2.6 was named a false force limit; ``new_user_probes/fourth_wave.py``)."""
+    from sim2real.physics.model_apply import to_mjmodel
+    from sim2real.sysid.candidates import Scales, library
+    from sim2real.sysid.export import write_fitted_mjcf
+    from sim2real.sysid.system import System
+
+    xml = tmp_path / "spring.xml"
+    xml.write_text("""<mujoco><option timestep="0.002"/><worldbody><body name="rod">
+      <joint name="hinge" axis="0 1 0" stiffness="2"/><geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/>
+      </body></worldbody><actuator><motor name="m" joint="hinge"/></actuator></mujoco>""")
+    system = System(str(xml))
+    sc = Scales(force=np.ones(1), speed=np.ones(1), range=np.ones(1), act_force=np.ones(1), dt=0.01, max_delay=8)
+    (c,) = library(system, sc, ("joint_stiffness",))
+    assert c.search[0][0] < 0 < c.search[0][1] and {g[0] < 0 for g in c.grid} == {True, False}
+    system.spec.check_value("stiffness:hinge", -1.5)   # the declared 2 softened to 0.5
+    with pytest.raises(ValueError, match="stiffness:hinge"):
+        system.spec.check_value("stiffness:hinge", -2.5)  # a negative total
+    z = system.spec.default.copy()
+    z[system.spec.index("stiffness:hinge")] = 0.6
+    assert to_mjmodel(system.physics, z).jnt_stiffness[0] == pytest.approx(2.6)
+    out = str(tmp_path / "fitted.xml")
+    write_fitted_mjcf(str(xml), system, z, {"stiffness:hinge": 0.6}, out)
+    assert mujoco.MjModel.from_xml_path(out).jnt_stiffness[0] == pytest.approx(2.6)
+
+
 def test_backlash_on_an_integrating_servo_is_a_rotor_behind_a_dead_band(tmp_path):
     """Against an independent plant: native MuJoCo, the ``intvelocity`` servo driving a rotor
     (armature 1e-3 kg m^2) that meets the pendulum through a 0.05 rad dead band and a 40 Nm/rad

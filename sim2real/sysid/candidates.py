@@ -12,9 +12,11 @@ effect                 attached    parameters (spec names)
 coulomb_friction       joint       ``coulomb``, ``coulomb_vel`` (the speed over which it builds up)
                                    (+ ``coulomb_asym``: a level per direction)
 viscous_damping        joint       ``viscous`` (only where the MJCF declares no damping)
-joint_stiffness        joint       ``stiffness`` (only where the MJCF declares no spring)
+joint_stiffness        joint       ``stiffness`` (added to a declared spring: then either sign)
 sensor_offset          joint       ``sensor_offset``
 mass_offset            body        ``payload`` and ``payload_r`` (a point mass along the link)
+contact_friction       body        ``contact_friction`` (the sliding friction of its contacts; bodies
+                                   that touch something in the recordings)
 action_delay           global      ``action_delay`` (samples, fractional)
 motor_lag              actuator    ``motor_lag`` (time constant, s)
 motor_lag_all          global      ``motor_lag_all`` (one time constant for every actuator; models
@@ -49,6 +51,7 @@ ALL_EFFECTS = ("none",) + tuple(k.effect for g in _GROUPS for k in kinds.offerin
 """Everything it can search (``effects=[...]`` may add the rest, e.g. ``quadratic_drag``)."""
 SAT_WIDEN = 64  # a saturation that ends at the bottom of its range is searched down to this much lower (``Candidate.widen``)
 EDGE = 0.02  # a fitted value within this share of its range's edge ended there
+TOUCH_SHARE = 0.02  # a body in contact in fewer of the samples than this cannot show a contact friction
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,6 +63,8 @@ class Candidate:
       grid: screening points, each a tuple of values for ``params``.
       scales: typical magnitude of each parameter (finite-difference steps, standard errors).
       search: range of each parameter the search covers (a fit ending at an edge says so).
+      off: the first parameter's value where the effect is absent (0 but for a correction of a
+        declared value: a contact friction's is the model's own).
     """
 
     effect: str
@@ -68,6 +73,7 @@ class Candidate:
     grid: tuple
     scales: tuple
     search: tuple
+    off: float = 0.0
 
     @property
     def label(self) -> str:
@@ -82,7 +88,7 @@ class Candidate:
         nothing from the effect, only from the other parameters it re-fitted."""
         if self.effect == "actuator_saturation":
             return self.at_top(v)
-        return abs(v) <= 1e-3 * self.scales[0]
+        return abs(v - self.off) <= 1e-3 * self.scales[0]
 
     def at_top(self, v: float) -> bool:
         """The first parameter ``v`` ended at the top of its search range (within ``EDGE``) or past it."""
@@ -116,7 +122,8 @@ class Scales:
     """What sizes the grids: per joint the generalised force it needs (RMS of the nominal inverse
     dynamics), its RMS speed, range and inertia (the mass matrix's diagonal at the mean pose);
     per actuator the 99.5th percentile of its force; the sample period; the longest delay the
-    buffer holds (samples)."""
+    buffer holds (samples); per body whether it touches anything (a contact in at least
+    ``TOUCH_SHARE`` of the samples)."""
 
     force: np.ndarray
     speed: np.ndarray
@@ -125,6 +132,7 @@ class Scales:
     dt: float
     max_delay: int
     inertia: np.ndarray = None
+    touch: np.ndarray = None
 
 
 def actuator_force_scale(act_force: np.ndarray) -> np.ndarray:
@@ -142,10 +150,13 @@ def scales_from(system, trajs, act_force: np.ndarray) -> Scales:
     a = np.concatenate([t.a for t in trajs])
     keep = np.linspace(0, len(q) - 1, min(len(q), 3000)).astype(int)
     frc = np.empty((len(keep), m.nv))
+    touching = np.zeros(m.nbody)
     for i, k in enumerate(keep):
         d.qpos[:], d.qvel[:], d.qacc[:] = q[k], v[k], a[k]
         mujoco.mj_inverse(m, d)
         frc[i] = d.qfrc_inverse
+        if d.ncon:  # (mj_inverse found the contacts at this pose)
+            touching[np.unique(m.geom_bodyid[d.contact.geom[:d.ncon]])] += 1
     # per joint, over its dofs (a ball joint's three; one for a hinge or slide)
     F = np.array([np.sqrt(np.mean(frc[:, joint_dofs(m, j)] ** 2)) for j in range(m.njnt)])
     af = actuator_force_scale(act_force)
@@ -158,7 +169,7 @@ def scales_from(system, trajs, act_force: np.ndarray) -> Scales:
     speed = np.array([np.sqrt(np.mean(v[:, joint_dofs(m, j)] ** 2)) for j in range(m.njnt)])
     span = np.ptp(q, 0)[m.jnt_qposadr]
     return Scales(np.maximum(F, 1e-9), np.maximum(speed, 1e-9), np.maximum(span, 1e-9), np.maximum(af, 1e-9), trajs[0].dt,
-                  int(system.spec["action_delay"].high), np.maximum(I, 1e-9))
+                  int(system.spec["action_delay"].high), np.maximum(I, 1e-9), touching >= TOUCH_SHARE * len(keep))
 
 
 def library(system, sc: Scales, effects=EFFECTS) -> list[Candidate]:
@@ -170,9 +181,9 @@ def library(system, sc: Scales, effects=EFFECTS) -> list[Candidate]:
     m = system.mj
     out: list[Candidate] = []
 
-    def add(effect, target, params, grid, scales, search):
+    def add(effect, target, params, grid, scales, search, off=0.0):
         out.append(Candidate(effect, target, tuple(params), tuple(tuple(float(x) for x in g) for g in grid),
-                             tuple(float(s) for s in scales), tuple(tuple(map(float, r)) for r in search)))
+                             tuple(float(s) for s in scales), tuple(tuple(map(float, r)) for r in search), float(off)))
 
     targets = {kinds.JOINT: sorted(system.one_dof + system.balls), kinds.BODY: range(m.nbody), "": (-1,),
                kinds.ACTUATOR: range(m.nu)}

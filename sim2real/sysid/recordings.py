@@ -38,6 +38,12 @@ MAX_STEPS_PER_SAMPLE = 1000
 # it (``_grid``, ``resample``); a step longer than MAX_GAP median steps (samples lost) is refused.
 UNIFORM = 0.01
 MAX_GAP = 3.0
+# A measured velocity whose integral over the time column differs from the change of its position
+# by more than this share is refused (``_check_velocity_scale``): deg/s or rpm read as rad/s, a
+# motor's speed before its gear, or stamps spaced by another clock than the samples'.
+VEL_SCALE = 0.15
+VEL_WINDOW_S = 0.5  # the windows the two displacements are compared over (a filter's lag averages out)
+VEL_SE = 5.0  # ... and by this many of the ratio's standard errors
 
 
 class RecordingError(ValueError):
@@ -301,6 +307,7 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
                                  + (f"; or the model's range was written in radians ([{d_lo:.4g}, {d_hi:.4g}], which "
                                     "the recording fits) and read as degrees: MuJoCo reads MJCF angles in degrees "
                                     "unless <compiler angle=\"radian\"/>" if in_rad else ""))
+    _check_velocity_scale(path, model, t, cols)
     steps = med / model.opt.timestep
     if med > MAX_PERIOD_S or steps > MAX_STEPS_PER_SAMPLE:
         raise RecordingError(f"{path}: column 'time': the samples are {med:.6g} s apart ({steps:.0f} of the model's "
@@ -310,6 +317,51 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
     rec = Recording(path, t, cols)
     step, off = _grid(t)
     return resample(rec, model, step, off) if np.abs(off).max() > UNIFORM * step else rec
+
+
+def _check_velocity_scale(path: str, model: mujoco.MjModel, t: np.ndarray, cols: dict) -> None:
+    """Refuse a hinge's or slide's ``qvel`` column whose displacement disagrees with its ``qpos``.
+
+    Over windows of ``VEL_WINDOW_S`` the velocity's trapezoid integral against the time column
+    and the position's change must agree within ``VEL_SCALE`` (their least-squares ratio, where it
+    is off by more than ``VEL_SE`` of its standard errors; judged where the joint moves over 10
+    noise stds per window and the velocity's noise is under a third of its spread). A ratio of 57.3 is deg/s read as rad/s; 1.25, stamps 5 ms apart on samples taken
+    every 4 ms (which, with positions alone, no check can see: the diagnosis then names false
+    effects). Windows, not samples, so a velocity filter's lag does not count.
+    """
+    from sim2real.sysid.trajectory import noise_std, turn_jumps
+
+    n = max(10, int(round(VEL_WINDOW_S / np.median(np.diff(t)))))
+    edges = np.arange(0, len(t), n)
+    if len(edges) < 4:
+        return
+    for j in range(model.njnt):
+        if int(model.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            continue
+        name = model.joint(j).name
+        q, v = cols.get(f"qpos:{name}"), cols.get(f"qvel:{name}")
+        if q is None or v is None:
+            continue
+        hinge = int(model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
+        if hinge and turn_jumps(q):
+            q = np.unwrap(q)
+        area = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
+        d_v, d_q = np.diff(area[edges]), np.diff(q[edges])
+        # (a velocity as noisy as a third of what it measures -- an encoder's count differenced,
+        # 0.9 rad/s rms on a SCARA's elbow -- integrates to displacements too uncertain to judge)
+        if (np.sqrt(np.mean(d_q ** 2)) < 10 * float(noise_std(q[:, None])[0])
+                or not float(noise_std(v[:, None])[0]) < np.std(v) / 3):
+            continue
+        k = float(np.sum(d_v * d_q) / np.sum(d_q ** 2))
+        # the ratio's standard error, from the windows' scatter about it
+        se = float(np.sqrt(np.sum((d_v - k * d_q) ** 2) / (len(d_q) - 1) / np.sum(d_q ** 2)))
+        if abs(np.log(abs(k) + 1e-12)) > np.log(1 + VEL_SCALE) and abs(k - 1) > VEL_SE * se:
+            raise RecordingError(
+                f"{path}: column 'qvel:{name}' integrates over the time column to {k:.3g}x the change of "
+                f"'qpos:{name}': velocities must be in {'rad/s' if hinge else 'm/s'} of the joint "
+                "(deg/s read as rad/s: 57.3; rpm: 9.55; a motor's speed before its gear: the ratio), or the "
+                f"time stamps are spaced {k:.3g}x the samples' true period (samples every 4 ms stamped 5 ms "
+                "apart: 1.25): check the logger's rate")
 
 
 def _grid(t: np.ndarray) -> tuple[float, np.ndarray]:

@@ -356,7 +356,7 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
 
     for s in d["selected"]:
         B += [("h3", f"`{s['effect']}`" + (f" at `{s['target']}`" if s["target"] else "")),
-              ("p", f"Validation error x{s['validation_ratio']:.3f} of the model before it (paired t = {s['t']:.1f}; "
+              ("p", f"Validation error x{s['validation_ratio']:.3g} of the model before it (paired t = {s['t']:.1f}; "
                     "lower is better).")]
         rows = []
         for k, v in s["params"].items():

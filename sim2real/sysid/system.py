@@ -141,6 +141,7 @@ class System:
                                   p.unit, "declared friction loss (Coulomb level)", "coulomb", p.index)
         params += effect
         params += catalog.payload_position_params(m, moving)
+        params += catalog.contact_friction_params(m, moving)
         params += catalog.backlash_motor_side_params(m, range(m.nu))
         if m.nu >= 2:  # one lag shared by every actuator (searched when asked for: kinds/lag.py)
             params.append(shared_lag_param())
@@ -205,9 +206,6 @@ class System:
         fitted values are relative to the nominal masses (the fits, the force-scale finding and the
         report's notes all ask this)."""
         return int(self.mj.nu) > 0
-
-    def declared_stiffness(self, joint: str) -> bool:
-        return float(self.mj.jnt_stiffness[self.joints.index(joint)]) > 0
 
     def declared_damping(self, joint: str) -> bool:
         return f"damping:{joint}" in self.spec
