@@ -118,7 +118,8 @@ HELD_WRIST = SERVO_ARM.replace('timestep="0.002" integrator="implicit"', 'timest
     "</actuator>", '<position name="hold" joint="wrist" kp="30" kv="0.5" ctrlrange="-0.0001 0.0001"/></actuator>')
 
 # name: (model text, the truth (an attribute string for {truth}, or ""), words, drive, extras):
-#   drive: "multisine" (ctrl), "steps" (random steps in ctrl), "swing" (released, no actuator);
+#   drive: "multisine" (ctrl), "steps" (random steps in ctrl), "swing" (released, no actuator),
+#     "sine" (one sine of 0.7 Hz at 0.8 of the command range: the test a lab runs first);
 #   extras: delay_s (the command reaches the plant this late), offset (added to the logged angle),
 #   plant_dt (the true plant stepped at this, not the model's step), period (log period, s),
 #   jitter (each position sample taken up to this many physics steps off its instant, its time stamped so),
@@ -179,6 +180,8 @@ def record(name, text, truth, drive, extras, work):
             if drive == "multisine":
                 u = np.sin(2 * np.pi * freqs * t + phases).sum(1) / 2.5
                 cmd = np.clip((lo + hi) / 2 + u * (hi - lo) / 2, lo, hi)
+            elif drive == "sine":
+                cmd = (lo + hi) / 2 + 0.8 * np.sin(2 * np.pi * 0.7 * t + r) * (hi - lo) / 2
             elif drive == "steps":
                 cmd = (lo + hi) / 2 + levels[int(t / 0.25), :m.nu] * (hi - lo) / 2 * 0.8
             else:
