@@ -900,6 +900,38 @@ def test_a_delay_named_on_several_actuators_is_replaced_by_their_shared_lag_wher
     assert M is steps[1] and len(sel.refits) == 1
 
 
+def test_a_backlash_named_is_replaced_by_its_joints_rotor_inertia_where_that_passes():
+    """``SelectConfig.rotor`` (the sixth probe wave's pendulum: a 0.01 kg m^2 rotor left out of the
+    model was named a backlash whose motor-side inertia stood in for it): the rotor inertia of the
+    joint the band's actuator drives is fitted in place of the band, and replaces it where it
+    predicts the validation segments far better; where it predicts worse, the band stays; a band
+    on an actuator without a rotor candidate is left alone."""
+    from sim2real.sysid.candidates import Candidate
+
+    F = Candidate("coulomb_friction", "j", ("coulomb:j",), ((0.1,),), (1.0,), ((0.0, 1.0),))
+    B = Candidate("backlash", "m", ("backlash:m",), ((0.01,),), (0.01,), ((0.0, 0.2),))
+    R = Candidate("rotor_inertia", "j", ("armature:j",), ((0.001,),), (0.001,), ((0.0, 0.1),))
+    rng = np.random.default_rng(6)
+    base = 10 + rng.uniform(0, 1, 10)
+    fits = {frozenset(): (5000.0, base * 5), frozenset({F.label}): (3000.0, base * 3),
+            frozenset({F.label, B.label}): (1000.0, base),
+            frozenset({F.label, R.label}): (300.0, base * 0.2 * rng.uniform(0.9, 1.1, 10))}
+    sel, fit, _ = _pair_selector(fits, [F, B], lambda on: (R, 0.4, (0.002,)))
+    sel._try, sel.refits, sel.rotors = _fitted_on_top(fit), [], {"m": R}
+    steps = [fit([], 0, 0), fit([F], 0, 0), fit([F, B], 0, 0)]
+    M, path = sel._rotor(steps[-1], steps)
+    assert [c.label for c in M.effects] == [F.label, R.label]
+    assert [S.label for S in path] == ["none", F.label, f"{F.label} + {R.label}"]
+    assert "it replaced the band backlash@m" in sel.refits[0]
+    fits[frozenset({F.label, R.label})] = (1200.0, base * 1.3)
+    sel.refits = []
+    M, path = sel._rotor(steps[-1], steps)
+    assert M is steps[-1] and path is steps and "the band backlash@m kept" in sel.refits[0]
+    sel.rotors, sel.refits = {"other": R}, []
+    M, path = sel._rotor(steps[-1], steps)
+    assert M is steps[-1] and not sel.refits
+
+
 def test_a_backlash_beside_a_named_friction_is_fitted_whatever_its_screen_score():
     """``SelectConfig.geared``: once a Coulomb friction is named on a joint, the backlash on that
     joint's actuator joins the candidates fitted in the round (the screen's linearisation in the

@@ -11,9 +11,10 @@ import mujoco
 import numpy as np
 
 from sim2real.physics import kinds
+from sim2real.physics.kinds.armature import params as armature_params  # noqa: F401
 from sim2real.physics.kinds.backlash import motor_side_params as backlash_motor_side_params  # noqa: F401
-from sim2real.physics.kinds.contact import body_params as contact_friction_params  # noqa: F401
 from sim2real.physics.kinds.base import actuator_is_linear, name_of, unit_for
+from sim2real.physics.kinds.contact import body_params as contact_friction_params  # noqa: F401
 from sim2real.physics.kinds.gain import declare as actuator_gain_params  # noqa: F401
 from sim2real.physics.kinds.gain import gain_law_entries, is_servo  # noqa: F401
 from sim2real.physics.kinds.mass import declare as body_mass_params  # noqa: F401

@@ -79,7 +79,7 @@ class PhysicsModel:
 # Fields ``apply`` may change, copied back for native MuJoCo (parity tests, exported MJCF).
 APPLIED_FIELDS = (
     "body_mass", "body_ipos", "body_inertia", "body_iquat", "body_subtreemass", "geom_size", "geom_rbound",
-    "geom_friction", "dof_damping", "jnt_stiffness", "actuator_gainprm", "actuator_biasprm",
+    "geom_friction", "dof_damping", "dof_armature", "jnt_stiffness", "actuator_gainprm", "actuator_biasprm",
     "actuator_forcerange",
 )
 

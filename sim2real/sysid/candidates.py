@@ -16,7 +16,9 @@ joint_stiffness        joint       ``stiffness`` (added to a declared spring: th
 sensor_offset          joint       ``sensor_offset``
 mass_offset            body        ``payload`` and ``payload_r`` (a point mass along the link)
 contact_friction       body        ``contact_friction`` (the sliding friction of its contacts; bodies
-                                   that touch something in the recordings)
+                                   that touch something in the recordings; only when asked for)
+rotor_inertia          joint       ``armature`` (a geared rotor's inertia; only when asked for, and in
+                                   place of a named backlash: ``SelectConfig.rotor``)
 action_delay           global      ``action_delay`` (samples, fractional)
 motor_lag              actuator    ``motor_lag`` (time constant, s)
 motor_lag_all          global      ``motor_lag_all`` (one time constant for every actuator; models

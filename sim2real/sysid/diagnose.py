@@ -119,6 +119,8 @@ class DiagnoseConfig:
         more than this many times higher, whatever the validation segments say (0: off; ``SelectConfig``).
       shared_lag: a delay named on a model with several actuators is fitted again as one lag
         shared by every actuator, which replaces it where that passes the test (``SelectConfig``).
+      rotor: a backlash named on an actuator is fitted again as a rotor inertia on the joint it
+        drives, which replaces it where that passes the test (off by default; ``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
@@ -199,6 +201,7 @@ class DiagnoseConfig:
     swap: bool = SelectConfig.swap
     prune_fit: float = SelectConfig.prune_fit
     shared_lag: bool = SelectConfig.shared_lag
+    rotor: bool = SelectConfig.rotor
     refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
@@ -737,9 +740,10 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                     band_shown=cfg.band_shown, timing_restart=cfg.timing_restart,
                                     freeze_at_noise=freeze, pair_screen=cfg.pair_screen,
                                     timing_relative=cfg.timing_relative, swap=cfg.swap,
-                                    prune_fit=cfg.prune_fit, shared_lag=cfg.shared_lag),
+                                    prune_fit=cfg.prune_fit, shared_lag=cfg.shared_lag, rotor=cfg.rotor),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
-                       allowed=cfg.expressible or None, shared=_shared_lag(cfg, system, sc))
+                       allowed=cfg.expressible or None, shared=_shared_lag(cfg, system, sc),
+                       rotors=_rotors(cfg, system, sc))
         final, steps = sel.run()
         bar.step(text="checking on held-out data")
         checked = _nrmse(sh, fitter, [z0] + [M.z for M in steps], check_tiles)
@@ -945,6 +949,22 @@ def _shared_lag(cfg: DiagnoseConfig, system: System, sc):
     cands = [c for c in library(system, sc, ("motor_lag_all",))
              if not cfg.expressible or set(c.params) <= set(cfg.expressible)]
     return cands[0] if cands else None
+
+
+def _rotors(cfg: DiagnoseConfig, system: System, sc) -> dict:
+    """Per actuator that drives a joint directly, the ``rotor_inertia`` candidate of that joint,
+    which the selection fits in place of a band named on the actuator (``SelectConfig.rotor``);
+    empty where it is searched anyway."""
+    if "rotor_inertia" in cfg.effects:
+        return {}
+    by_joint = {c.target: c for c in library(system, sc, ("rotor_inertia",))
+                if not cfg.expressible or set(c.params) <= set(cfg.expressible)}
+    out = {}
+    for a, name in enumerate(system.actuators):
+        j = actuator_joint(system.mj, a)
+        if j >= 0 and system.joints[j] in by_joint:
+            out[name] = by_joint[system.joints[j]]
+    return out
 
 
 def _model_for_loading(path: str) -> mujoco.MjModel:

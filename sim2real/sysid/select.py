@@ -19,7 +19,8 @@ Forward selection on the simulation error (``fit.py``):
    the one with the lowest error on the fitted and validation segments together joins the model.
 4. Repeat from 2 until nothing passes (or ``max_effects``). Then each named effect of a model
    with two or more is tried replaced by what screens best in its place (``_swap``), and a
-   delay on a model with several actuators by one lag they share (``_shared_lag``).
+   delay on a model with several actuators by one lag they share, a named backlash by the rotor
+   inertia of its joint (``_in_place``).
 5. Backward check (``_prune``): each named effect must still pass the test against the model
    without it; the weakest that fails is dropped, until all pass.
 
@@ -229,6 +230,14 @@ class SelectConfig:
         stands in for their lag better than any one actuator's lag does: a 2-link arm whose two
         motors lag 30 ms was named a 27 ms delay (held-out error 0.074 -> 0.0082), the shared
         lag 29.9 ms when asked (-> 0.0024).
+      rotor: a backlash named on an actuator is fitted again as a rotor inertia on the joint it
+        drives (``rotor_inertia``, otherwise searched only when asked), which replaces the band
+        where it passes the test against the model with the band. A geared motor's rotor adds
+        inertia without weight; left out of a pendulum's model (0.01 kg m^2), it was named a
+        backlash whose motor-side inertia (0.0064) stood in for it (held-out 0.0188 -> 0.0019;
+        the rotor, asked for: 0.009993, -> 0.000096). Off by default: on the tuning lists' 67
+        cases that name a band it replaced one, a true band (the focus list's 3064, a filtered
+        drive: validation ratio 0.475), and no other (``tuning.md`` step 93, not kept as a default).
       prune_fit: the backward check keeps an effect whose removal multiplies the fitted segments'
         objective by more than this, whatever the validation segments say (0: no such rule). A
         stand-in that lost its reason no longer carries the fit; an effect the rest cannot
@@ -263,6 +272,7 @@ class SelectConfig:
     swap: bool = True
     prune_fit: float = 10.0
     shared_lag: bool = True
+    rotor: bool = False
 
 
 TIMING = ("action_delay", "motor_lag")
@@ -311,15 +321,17 @@ class Selector:
     """Forward selection over ``candidates`` with ``fitter`` on the fit/validation segments."""
 
     def __init__(self, fitter: Fitter, nominal: list[str], candidates: list[Candidate], cfg: SelectConfig,
-                 progress=None, step_level: float = 0.0, finer=None, allowed=None, shared=None):
+                 progress=None, step_level: float = 0.0, finer=None, allowed=None, shared=None, rotors=None):
         """``finer(k)``: the fitter of the same segments with a physics step ``k`` times shorter,
         or None where none can be built (``SelectConfig.finer``);
         ``allowed``: the parameter names an effect may use (None: any; ``DiagnoseConfig.expressible``),
         which decides whether a friction may get a level per direction;
         ``shared``: the lag shared by every actuator (a ``motor_lag_all`` candidate) fitted in place
-        of a named delay (``SelectConfig.shared_lag``), or None."""
+        of a named delay (``SelectConfig.shared_lag``), or None;
+        ``rotors``: per actuator, the rotor inertia (a ``rotor_inertia`` candidate) of the joint it
+        drives, fitted in place of a backlash named on it (``SelectConfig.rotor``)."""
         self.f, self.nominal, self.cands, self.cfg = fitter, list(nominal), list(candidates), cfg
-        self.shared = shared
+        self.shared, self.rotors = shared, dict(rotors or {})
         self.step_level = float(step_level)
         self._finer, self._fine = finer, _UNBUILT
         self._fine_fits: dict = {}
@@ -883,23 +895,40 @@ class Selector:
             M, steps = self._swap(M, steps)
         if self.cfg.shared_lag and self.shared is not None:
             M, steps = self._shared_lag(M, steps)
+        if self.cfg.rotor and self.rotors:
+            M, steps = self._rotor(M, steps)
         return self._prune(M, steps)
 
     def _shared_lag(self, M: Model, steps: list[Model]) -> tuple[Model, list[Model]]:
-        """The shared lag (``self.shared``) fitted in place of ``M``'s action delay, replacing it
-        where it passes the test against ``M`` (``SelectConfig.shared_lag``); a note either way."""
+        """The shared lag (``self.shared``) in place of ``M``'s action delay (``SelectConfig.shared_lag``)."""
         delay = next((c for c in M.effects if c.effect == "action_delay"), None)
         if delay is None:
             return M, steps
-        self.progress("fitting one lag shared by every actuator in place of the delay")
-        R = self._without(M, delay)
-        tr = self._try(R, self.screen(R, [self.shared])[0])
+        return self._in_place(M, steps, delay, self.shared, "one lag shared by every actuator, as identical "
+                              "drives have", "the delay")
+
+    def _rotor(self, M: Model, steps: list[Model]) -> tuple[Model, list[Model]]:
+        """Each band ``M`` names on an actuator of ``self.rotors`` in turn, the rotor inertia of the
+        joint it drives in its place (``SelectConfig.rotor``)."""
+        for band in [c for c in M.effects if c.effect == "backlash" and c.target in self.rotors]:
+            M, steps = self._in_place(M, steps, band, self.rotors[band.target], "a rotor's inertia on the joint "
+                                      "the band's actuator drives: its motor-side inertia may be all the band "
+                                      "explains", f"the band {band.label}")
+        return M, steps
+
+    def _in_place(self, M: Model, steps: list[Model], old: Candidate, new: Candidate, why: str,
+                  words: str) -> tuple[Model, list[Model]]:
+        """``new`` fitted in place of ``M``'s named ``old``, replacing it where it passes the test
+        against ``M`` (``_accept``), ``steps`` then rebuilt (``_path``); a note either way (``why``:
+        what ``new`` stands for; ``words``: how the note names ``old``)."""
+        self.progress(f"fitting {new.label} in place of {old.label}")
+        R = self._without(M, old)
+        tr = self._try(R, self.screen(R, [new])[0])
         C = tr.model
         self.validate([C])
         ok, ratio, t, _ = self._accept(M, C, False)
-        self.refits.append(f"{self.shared.label} (one lag shared by every actuator, as identical drives have) fitted "
-                           f"in place of the action delay: validation ratio {ratio:.3f}, t = {t:.1f}, "
-                           + ("it replaced the delay" if ok else "the delay kept"))
+        self.refits.append(f"{new.label} ({why}) fitted in place of {words}: validation ratio {ratio:.3f}, "
+                           f"t = {t:.1f}, " + (f"it replaced {words}" if ok else f"{words} kept"))
         if not ok:
             return M, steps
         return C, self._path(C, steps)

@@ -142,6 +142,7 @@ class System:
         params += effect
         params += catalog.payload_position_params(m, moving)
         params += catalog.contact_friction_params(m, moving)
+        params += catalog.armature_params(m, self.one_dof)
         params += catalog.backlash_motor_side_params(m, range(m.nu))
         if m.nu >= 2:  # one lag shared by every actuator (searched when asked for: kinds/lag.py)
             params.append(shared_lag_param())
