@@ -84,6 +84,7 @@ def test_payload_needs_no_site(tmp_path):
     assert "payload_mass_lower" in [mujoco.mj_id2name(fitted, mujoco.mjtObj.mjOBJ_BODY, b) for b in range(fitted.nbody)]
 
 
+@pytest.mark.slow  # an 8 s arm diagnosis (~35 s on 2 cores), moved to make test-slow to pay for the fifty-seventh session's tests
 def test_a_payload_at_the_top_of_its_range_is_searched_wider(tmp_path):
     """``select._at_edge``: a payload's range ends at 5x its body's mass. The arm of
     ``test_payload_needs_no_site`` (0.24 kg at the lower link's tip) with the lower link's mass
