@@ -869,68 +869,47 @@ def test_a_stand_in_named_early_is_replaced_by_what_screens_best_in_its_place():
     assert M is steps[-1] and path is steps and not sel.refits
 
 
-def test_a_delay_named_on_several_actuators_is_replaced_by_their_shared_lag_where_that_passes():
-    """``SelectConfig.shared_lag`` (``third_wave.py``'s ``arm_motor_lag``: two motors lagging 30 ms
-    named a 27 ms delay): the lag shared by every actuator is fitted in place of the delay, and
-    replaces it beside the rest where it predicts the validation segments at a tenth of the
-    delay's error; where it predicts worse, the delay stays; a note either way."""
+@pytest.mark.parametrize("kind", ["shared_lag", "rotor"])
+def test_a_named_stand_in_is_replaced_in_place_where_that_passes(kind):
+    """``Selector._in_place``: ``SelectConfig.shared_lag`` (``third_wave.py``'s ``arm_motor_lag``:
+    two motors lagging 30 ms named a 27 ms delay) fits the lag shared by every actuator in place
+    of a named delay; ``SelectConfig.rotor`` (``sixth_wave.py``: a 0.01 kg m^2 rotor left out of a
+    pendulum's model named a backlash whose motor-side inertia stood in for it) fits the rotor
+    inertia of the joint a band's actuator drives in place of the band. The stand-in is replaced,
+    beside the rest, where the other predicts the validation segments far better; where it
+    predicts worse it stays; a note either way; with nothing to replace nothing is fitted."""
     from sim2real.sysid.candidates import Candidate
 
     F = Candidate("coulomb_friction", "j", ("coulomb:j",), ((0.1,),), (1.0,), ((0.0, 1.0),))
-    D = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
-    S = Candidate("motor_lag_all", "", ("motor_lag_all",), ((0.01,),), (1.0,), ((0.0, 0.25),))
+    if kind == "shared_lag":
+        old = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+        new = Candidate("motor_lag_all", "", ("motor_lag_all",), ((0.01,),), (1.0,), ((0.0, 0.25),))
+        words = "the delay"
+    else:
+        old = Candidate("backlash", "m", ("backlash:m",), ((0.01,),), (0.01,), ((0.0, 0.2),))
+        new = Candidate("rotor_inertia", "j", ("armature:j",), ((0.001,),), (0.001,), ((0.0, 0.1),))
+        words = "the band backlash@m"
     rng = np.random.default_rng(5)
     base = 10 + rng.uniform(0, 1, 10)
     fits = {frozenset(): (5000.0, base * 5), frozenset({F.label}): (3000.0, base * 3),
-            frozenset({F.label, D.label}): (1000.0, base),
-            frozenset({F.label, S.label}): (200.0, base * 0.1 * rng.uniform(0.9, 1.1, 10))}
-    sel, fit, _ = _pair_selector(fits, [F, D], lambda on: (S, 0.4, (0.02,)))
-
-    sel._try, sel.refits, sel.shared = _fitted_on_top(fit), [], S
-    steps = [fit([], 0, 0), fit([F], 0, 0), fit([F, D], 0, 0)]
-    M, path = sel._shared_lag(steps[-1], steps)
-    assert [c.label for c in M.effects] == [F.label, S.label]
-    assert [S_.label for S_ in path] == ["none", F.label, f"{F.label} + {S.label}"]
-    assert "it replaced the delay" in sel.refits[0]
-    fits[frozenset({F.label, S.label})] = (1200.0, base * 1.3)
+            frozenset({F.label, old.label}): (1000.0, base),
+            frozenset({F.label, new.label}): (200.0, base * 0.1 * rng.uniform(0.9, 1.1, 10))}
+    sel, fit, _ = _pair_selector(fits, [F, old], lambda on: (new, 0.4, (0.02,)))
+    sel._try, sel.refits, sel.shared, sel.rotors = _fitted_on_top(fit), [], new, {"m": new}
+    run = sel._shared_lag if kind == "shared_lag" else sel._rotor
+    steps = [fit([], 0, 0), fit([F], 0, 0), fit([F, old], 0, 0)]
+    M, path = run(steps[-1], steps)
+    assert [c.label for c in M.effects] == [F.label, new.label]
+    assert [S_.label for S_ in path] == ["none", F.label, f"{F.label} + {new.label}"]
+    assert f"it replaced {words}" in sel.refits[0]
+    fits[frozenset({F.label, new.label})] = (1200.0, base * 1.3)
     sel.refits = []
-    M, path = sel._shared_lag(steps[-1], steps)
-    assert M is steps[-1] and path is steps and "the delay kept" in sel.refits[0]
-    # no delay named: nothing is fitted
-    M, path = sel._shared_lag(steps[1], steps[:2])
-    assert M is steps[1] and len(sel.refits) == 1
-
-
-def test_a_backlash_named_is_replaced_by_its_joints_rotor_inertia_where_that_passes():
-    """``SelectConfig.rotor`` (the sixth probe wave's pendulum: a 0.01 kg m^2 rotor left out of the
-    model was named a backlash whose motor-side inertia stood in for it): the rotor inertia of the
-    joint the band's actuator drives is fitted in place of the band, and replaces it where it
-    predicts the validation segments far better; where it predicts worse, the band stays; a band
-    on an actuator without a rotor candidate is left alone."""
-    from sim2real.sysid.candidates import Candidate
-
-    F = Candidate("coulomb_friction", "j", ("coulomb:j",), ((0.1,),), (1.0,), ((0.0, 1.0),))
-    B = Candidate("backlash", "m", ("backlash:m",), ((0.01,),), (0.01,), ((0.0, 0.2),))
-    R = Candidate("rotor_inertia", "j", ("armature:j",), ((0.001,),), (0.001,), ((0.0, 0.1),))
-    rng = np.random.default_rng(6)
-    base = 10 + rng.uniform(0, 1, 10)
-    fits = {frozenset(): (5000.0, base * 5), frozenset({F.label}): (3000.0, base * 3),
-            frozenset({F.label, B.label}): (1000.0, base),
-            frozenset({F.label, R.label}): (300.0, base * 0.2 * rng.uniform(0.9, 1.1, 10))}
-    sel, fit, _ = _pair_selector(fits, [F, B], lambda on: (R, 0.4, (0.002,)))
-    sel._try, sel.refits, sel.rotors = _fitted_on_top(fit), [], {"m": R}
-    steps = [fit([], 0, 0), fit([F], 0, 0), fit([F, B], 0, 0)]
-    M, path = sel._rotor(steps[-1], steps)
-    assert [c.label for c in M.effects] == [F.label, R.label]
-    assert [S.label for S in path] == ["none", F.label, f"{F.label} + {R.label}"]
-    assert "it replaced the band backlash@m" in sel.refits[0]
-    fits[frozenset({F.label, R.label})] = (1200.0, base * 1.3)
-    sel.refits = []
-    M, path = sel._rotor(steps[-1], steps)
-    assert M is steps[-1] and path is steps and "the band backlash@m kept" in sel.refits[0]
-    sel.rotors, sel.refits = {"other": R}, []
-    M, path = sel._rotor(steps[-1], steps)
-    assert M is steps[-1] and not sel.refits
+    M, path = run(steps[-1], steps)
+    assert M is steps[-1] and path is steps and f"{words} kept" in sel.refits[0]
+    # nothing to replace (no delay named; a band on an actuator without a rotor candidate)
+    sel.rotors = {"other": new}
+    M, path = run(steps[1], steps[:2]) if kind == "shared_lag" else run(steps[-1], steps)
+    assert M in (steps[1], steps[-1]) and len(sel.refits) == 1
 
 
 def test_a_backlash_beside_a_named_friction_is_fitted_whatever_its_screen_score():

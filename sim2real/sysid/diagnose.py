@@ -1256,8 +1256,9 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
             notes.append(f"{c.target} is tied to {', '.join(tied[c.target])} by an equality constraint: "
                          f"`{c.effect}` named at {c.target} may as well sit at {' or '.join(tied[c.target])} "
                          "(the recordings move them together)")
-        if c.effect == "joint_stiffness" and system.mj.jnt_stiffness[system.joints.index(c.target)] > 0:
-            k0, dk = float(system.mj.jnt_stiffness[system.joints.index(c.target)]), float(z_fit[spec.index(c.params[0])])
+        k0 = float(system.mj.jnt_stiffness[system.joints.index(c.target)]) if c.effect == "joint_stiffness" else 0.0
+        if k0 > 0:  # (a correction of the declared spring: ``kinds/stiffness.py``)
+            dk = float(z_fit[spec.index(c.params[0])])
             notes.append(f"`joint_stiffness` at {c.target} corrects the spring the model declares there: {k0:.4g} -> "
                          f"{k0 + dk:.4g} {spec[c.params[0]].unit} in all (a parameter of the model rather than "
                          "physics it left out; fitted.xml writes the total)")

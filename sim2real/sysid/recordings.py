@@ -325,9 +325,10 @@ def _check_velocity_scale(path: str, model: mujoco.MjModel, t: np.ndarray, cols:
     Over windows of ``VEL_WINDOW_S`` the velocity's trapezoid integral against the time column
     and the position's change must agree within ``VEL_SCALE`` (their least-squares ratio, where it
     is off by more than ``VEL_SE`` of its standard errors; judged where the joint moves over 10
-    noise stds per window and the velocity's noise is under a third of its spread). A ratio of 57.3 is deg/s read as rad/s; 1.25, stamps 5 ms apart on samples taken
-    every 4 ms (which, with positions alone, no check can see: the diagnosis then names false
-    effects). Windows, not samples, so a velocity filter's lag does not count.
+    noise stds per window and the velocity's noise is under a third of its spread). A ratio of
+    57.3 is deg/s read as rad/s; 1.25, stamps 5 ms apart on samples taken every 4 ms (which, with
+    positions alone, no check can see: the diagnosis then names false effects). Windows, not
+    samples, so a velocity filter's lag does not count.
     """
     from sim2real.sysid.trajectory import noise_std, turn_jumps
 

@@ -19,8 +19,8 @@ Forward selection on the simulation error (``fit.py``):
    the one with the lowest error on the fitted and validation segments together joins the model.
 4. Repeat from 2 until nothing passes (or ``max_effects``). Then each named effect of a model
    with two or more is tried replaced by what screens best in its place (``_swap``), and a
-   delay on a model with several actuators by one lag they share, a named backlash by the rotor
-   inertia of its joint (``_in_place``).
+   delay on a model with several actuators by one lag they share (and, with ``rotor`` on, a
+   named backlash by the rotor inertia of its joint: ``_in_place``).
 5. Backward check (``_prune``): each named effect must still pass the test against the model
    without it; the weakest that fails is dropped, until all pass.
 
