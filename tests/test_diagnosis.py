@@ -877,7 +877,8 @@ def test_a_named_stand_in_is_replaced_in_place_where_that_passes(kind):
     pendulum's model named a backlash whose motor-side inertia stood in for it) fits the rotor
     inertia of the joint a band's actuator drives in place of the band. The stand-in is replaced,
     beside the rest, where the other predicts the validation segments far better; where it
-    predicts worse it stays; a note either way; with nothing to replace nothing is fitted."""
+    predicts worse it stays, and a band also where the rotor is better by less than
+    ``SelectConfig.rotor_ratio``; a note either way; with nothing to replace nothing is fitted."""
     from sim2real.sysid.candidates import Candidate
 
     F = Candidate("coulomb_friction", "j", ("coulomb:j",), ((0.1,),), (1.0,), ((0.0, 1.0),))
@@ -902,6 +903,13 @@ def test_a_named_stand_in_is_replaced_in_place_where_that_passes(kind):
     assert [c.label for c in M.effects] == [F.label, new.label]
     assert [S_.label for S_ in path] == ["none", F.label, f"{F.label} + {new.label}"]
     assert f"it replaced {words}" in sel.refits[0]
+    # better by half: the lag replaces the delay; the rotor needs SelectConfig.rotor_ratio (0.25)
+    fits[frozenset({F.label, new.label})] = (600.0, base * 0.5 * rng.uniform(0.95, 1.05, 10))
+    sel.refits = []
+    M, _ = run(steps[-1], steps)
+    replaced = [c.label for c in M.effects] == [F.label, new.label]
+    assert replaced == (kind == "shared_lag")
+    assert (kind == "rotor") == ("the ratio asked is 0.25 or less" in sel.refits[0])
     fits[frozenset({F.label, new.label})] = (1200.0, base * 1.3)
     sel.refits = []
     M, path = run(steps[-1], steps)

@@ -120,7 +120,9 @@ class DiagnoseConfig:
       shared_lag: a delay named on a model with several actuators is fitted again as one lag
         shared by every actuator, which replaces it where that passes the test (``SelectConfig``).
       rotor: a backlash named on an actuator is fitted again as a rotor inertia on the joint it
-        drives, which replaces it where that passes the test (off by default; ``SelectConfig``).
+        drives, which replaces it where that passes the test far better (``SelectConfig``).
+      rotor_ratio: how much better: the rotor's validation error at most this fraction of the
+        band's (``SelectConfig``).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
@@ -202,6 +204,7 @@ class DiagnoseConfig:
     prune_fit: float = SelectConfig.prune_fit
     shared_lag: bool = SelectConfig.shared_lag
     rotor: bool = SelectConfig.rotor
+    rotor_ratio: float = SelectConfig.rotor_ratio
     refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
@@ -740,7 +743,8 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                     band_shown=cfg.band_shown, timing_restart=cfg.timing_restart,
                                     freeze_at_noise=freeze, pair_screen=cfg.pair_screen,
                                     timing_relative=cfg.timing_relative, swap=cfg.swap,
-                                    prune_fit=cfg.prune_fit, shared_lag=cfg.shared_lag, rotor=cfg.rotor),
+                                    prune_fit=cfg.prune_fit, shared_lag=cfg.shared_lag, rotor=cfg.rotor,
+                                    rotor_ratio=cfg.rotor_ratio),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
                        allowed=cfg.expressible or None, shared=_shared_lag(cfg, system, sc),
                        rotors=_rotors(cfg, system, sc))
