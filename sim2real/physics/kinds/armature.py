@@ -4,9 +4,10 @@ the rotor's inertia), adds to the joint's inertia without adding weight -- MuJoC
 A diagnosis parameter (``armature:<joint>``, added to the joint's declared armature; on a joint
 that declares one, either sign down to a total of 0), not an env's: ``params`` builds it for the
 diagnosis' ``System``. Searched as ``rotor_inertia`` when asked for, or in place of a named band
-with ``SelectConfig.rotor``. Left out, a pendulum whose plant had a 0.01 kg m^2 rotor is named a
-backlash on the defaults: the band's motor-side inertia (0.0064) stands in for the rotor
-(``benchmarks/results/new_user_probes/README.md``, sixth wave).
+(``SelectConfig.rotor``). Left out, a pendulum whose plant had a 0.01 kg m^2 rotor was named a
+backlash: the band's motor-side inertia (0.0064) stood in for the rotor; fitted in the band's
+place, the rotor predicts 200x better and replaces it (``SelectConfig.rotor_ratio``;
+``benchmarks/results/new_user_probes/README.md``, sixth wave).
 """
 from __future__ import annotations
 
