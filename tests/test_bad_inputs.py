@@ -191,6 +191,8 @@ CASES = [
     ("precision_48", "diagnose", D + ["recordings=[a.csv]", "precision=48"], {}, "precision=48: must be 32 or 64"),
     ("finer_ratio_above_one", "diagnose", D + ["recordings=[a.csv]", "finer_ratio=1.5"], {},
      "finer_ratio=1.5: must be a fraction in (0, 1]"),
+    ("rotor_ratio_zero", "diagnose", D + ["recordings=[a.csv]", "rotor_ratio=0"], {},
+     "rotor_ratio=0.0: must be a fraction in (0, 1]"),
     ("negative_heldout_gain", "diagnose", D + ["recordings=[a.csv]", "heldout_gain=-0.1"], {},
      "heldout_gain=-0.1: must be a finite number >= 0"),
     ("nan_energy_explained", "diagnose", D + ["recordings=[a.csv]", "energy_explained=nan"], {},
