@@ -124,7 +124,8 @@ HELD_WRIST = SERVO_ARM.replace('timestep="0.002" integrator="implicit"', 'timest
 #   plant_dt (the true plant stepped at this, not the model's step), period (log period, s),
 #   jitter (each position sample taken up to this many physics steps off its instant, its time stamped so),
 #   lag_s (the command reaches the actuator through a first-order lag of this time constant),
-#   count, seconds (recordings and their length: 3 of 8 s)
+#   count, seconds (recordings and their length: 3 of 8 s), qfrc (a function of (qpos, qvel) giving
+#   a joint force applied at every physics step: physics the library has no name for, written here)
 PROBES = {
     "flywheel_intvelocity_friction": (FLYWHEEL, 'frictionloss="0.05"', "coulomb_friction@spin 0.05 N m",
                                       "multisine", {}),
@@ -191,6 +192,8 @@ def record(name, text, truth, drive, extras, work):
                 queue.append(cmd)
                 u_eff = u_eff + (queue.pop(0) - u_eff) * (1 - np.exp(-m.opt.timestep / extras.get("lag_s", 1e-12)))
                 d.ctrl[:] = u_eff
+                if "qfrc" in extras:  # a joint force written here, from the state it acts in
+                    d.qfrc_applied[:] = extras["qfrc"](d.qpos, d.qvel)
                 mujoco.mj_step(m, d)
                 qs.append(d.qpos.copy())
         for k, row in enumerate(rows):  # the positions, each taken jit[k] physics steps off its instant
