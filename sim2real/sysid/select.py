@@ -241,9 +241,10 @@ class SelectConfig:
         band nests the rotor (its motor-side inertia, the band closed), so a real band loses
         little to it; but the benchmark's bands are a dead zone *and* a motor-side inertia the
         model lacks, and with the test alone (``tuning.md`` step 93) the rotor replaced one of the
-        tuning lists' 67 named bands, a true one (the focus list's 3064, ratio 0.475; the others
-        0.5-4.5). 0.25 lies between that and the pendulum's 0.005 (``tuning.md`` step 94); the
-        arm of ``sixth_wave.py`` (0.702) keeps its false band.
+        tuning lists' 67 named bands, a true one (the focus list's 3064 at 0.475, the lowest of
+        the 64 rotors fitted there: 0.475-4.5). 0.25 lies between that and the pendulum's 0.005
+        (``tuning.md`` step 94; on 465 tuning-list cases run again it named no rotor); the arm
+        of ``sixth_wave.py`` (0.70-0.79) keeps its false band.
       prune_fit: the backward check keeps an effect whose removal multiplies the fitted segments'
         objective by more than this, whatever the validation segments say (0: no such rule). A
         stand-in that lost its reason no longer carries the fit; an effect the rest cannot
