@@ -1,5 +1,5 @@
 #!/bin/bash
-# One device call: LISTS="combos" SECONDS_LEFT=545 bash run_device.sh (run(carry=[".whlmin"])).
+# One device call: LISTS="combos" SECONDS_LEFT=545 bash run_device.sh (run(carry=[".whlmin"]); make_whlmin.sh builds .whlmin).
 # The tuning lists on the host's CPU cores (run_device.py), each list's lines to $OUT/<setting>.jsonl.
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whlmin/*.whl || exit
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 JAX_PLATFORMS=cpu
