@@ -244,10 +244,9 @@ class DiagnoseConfig:
             raise ValueError(f"prune_fit={self.prune_fit}: must be 0 (off) or a factor > 1")
         if self.finer < 0:
             raise ValueError(f"finer={self.finer}: must be >= 0 (0: off)")
-        if not 0 < self.finer_ratio <= 1:
-            raise ValueError(f"finer_ratio={self.finer_ratio}: must be a fraction in (0, 1]")
-        if not 0 < self.rotor_ratio <= 1:
-            raise ValueError(f"rotor_ratio={self.rotor_ratio}: must be a fraction in (0, 1]")
+        for key in ("finer_ratio", "rotor_ratio"):
+            if not 0 < getattr(self, key) <= 1:
+                raise ValueError(f"{key}={getattr(self, key)}: must be a fraction in (0, 1]")
         if self.band_scan == 1 or self.band_scan < 0:
             raise ValueError(f"band_scan={self.band_scan}: must be 0 (off) or >= 2 widths")
         for key in ("num_windows", "top", "max_effects", "backlash_starts", "refine_iters"):

@@ -936,11 +936,11 @@ class Selector:
         C = tr.model
         self.validate([C])
         ok, ratio, t, _ = self._accept(M, C, False)
-        short = ok and ratio > max_ratio
+        replaced = ok and ratio <= max_ratio
+        kept = f"{words} kept" + (f" (it passes, but the ratio asked is {max_ratio:g} or less)" if ok else "")
         self.refits.append(f"{new.label} ({why}) fitted in place of {words}: validation ratio {ratio:.3f}, "
-                           f"t = {t:.1f}, " + (f"it replaced {words}" if ok and not short else f"{words} kept")
-                           + (f" (it passes, but the ratio asked is {max_ratio:g} or less)" if short else ""))
-        if not ok or short:
+                           f"t = {t:.1f}, " + (f"it replaced {words}" if replaced else kept))
+        if not replaced:
             return M, steps
         return C, self._path(C, steps)
 
