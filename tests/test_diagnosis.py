@@ -207,6 +207,10 @@ def test_the_heldout_walk_judges_the_typical_segment_too():
     assert heldout_walk([0.1, 0.0995, 0.05], 0.2, flat, joins, cfg) == 0
     # ... unless it is the first half of a pair that joined, judged with its second
     assert heldout_walk([0.1, 0.0995, 0.05], 0.2, flat, [False, True, False], cfg) == 2
+    # ... or the first members of a group on several joints, judged with its last
+    flat4 = np.full((4, 40), 0.05)
+    assert heldout_walk([0.1, 0.0995, 0.099, 0.05], 0.2, flat4, [False, True, True, False], cfg) == 3
+    assert heldout_walk([0.1, 0.0995, 0.099, 0.0991], 0.2, flat4, [False, True, True, False], cfg) == 0
     assert _typical_ratio(seg[1], seg[2]) == pytest.approx(0.2)
 
 
@@ -736,6 +740,51 @@ def test_a_pair_that_joined_together_is_judged_as_one_by_the_backward_check():
     sel.units = [frozenset({"coulomb_friction@j", "action_delay"})]
     M, path = sel._prune(fit([F, D], 0, 0), steps)
     assert M.effects == [] and "coulomb_friction@j + action_delay were dropped" in sel.pruned[0]
+
+
+def test_friction_on_every_joint_at_once_where_no_joint_alone_passes():
+    """``Selector._group``: no joint's friction alone lowers the validation error (each only a
+    third of what the others leave), together they do: the group joins, with its forward path
+    (a fit of each prefix) and a round per later member; the backward check then judges each
+    joint against the others. A group that does not pass, or ``group=()``, adds nothing; a
+    member fitted at its absent value is left out and the rest fitted again."""
+    from sim2real.sysid.candidates import Candidate
+    from sim2real.sysid.select import Trial
+
+    J = [Candidate("coulomb_friction", j, (f"coulomb:{j}",), ((0.1,),), (0.1,), ((0.0, 1.0),)) for j in ("j1", "j2", "j3")]
+    D = Candidate("viscous_damping", "j1", ("damping:j1",), ((0.1,),), (0.1,), ((0.0, 1.0),))
+    rng = np.random.default_rng(3)
+    bad = 400 + 50 * rng.uniform(0, 1, 10)
+    key = lambda *js: frozenset(f"coulomb_friction@{j}" for j in js)  # noqa: E731
+    fits = {frozenset(): (5000.0, bad), key("j1", "j2", "j3"): (1000.0, 10 + rng.uniform(0, 1, 10), 0.0, 0.1),
+            key("j1", "j2"): (3000.0, 300 + 50 * rng.uniform(0, 1, 10), 0.0, 0.1),
+            key("j1"): (4000.0, 390 + 50 * rng.uniform(0, 1, 10), 0.0, 0.1)}
+
+    def run(fits, absent=(), **cfg):
+        sel, fit = _selector(fits)
+        sel._absent = lambda c, M: c.target in absent   # (the stub's fits hold one value for all)
+        sel.spec.indices = lambda names: np.zeros(len(names), int)
+        sel.spec.default = np.zeros(1)
+        sel.cands, sel.groups = J + [D], []
+        sel.cfg = dataclasses.replace(sel.cfg, **cfg)
+        trials = []
+        for c in [D] + J:   # (screened: the damping first, the frictions low)
+            trials.append(Trial(c, -0.5))
+            trials[-1].start = (0.1,)
+        M = fit([], 0, 0)
+        return sel._group(M, trials), M
+
+    (G, path, rows), M = run(fits)
+    assert [c.label for c in G.effects] == [f"coulomb_friction@{j}" for j in ("j1", "j2", "j3")]
+    assert [S.label for S in path] == ["none", "coulomb_friction@j1", "coulomb_friction@j1 + coulomb_friction@j2",
+                                       G.label] and path[0] is M and path[-1] is G
+    assert [r[0].candidate.label for r in rows] == ["coulomb_friction@j2", "coulomb_friction@j3"]
+    assert rows[-1][0].model is G and rows[-1][0].passed and "no joint's alone passed" in rows[-1][0].note
+    assert run(fits, group=())[0] is None
+    assert run({**fits, key("j1", "j2", "j3"): (4900.0, bad * 0.99, 0.0, 0.1)})[0] is None   # does not pass
+    # j3 fitted at 0 (absent): the group is j1 and j2, fitted again without it
+    (G, path, rows), M = run({**fits, key("j1", "j2"): (1000.0, 10 + rng.uniform(0, 1, 10), 0.0, 0.1)}, absent=("j3",))
+    assert [c.label for c in G.effects] == ["coulomb_friction@j1", "coulomb_friction@j2"] and len(rows) == 1
 
 
 def _fitted_on_top(fit):

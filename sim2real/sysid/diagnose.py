@@ -123,6 +123,8 @@ class DiagnoseConfig:
         drives, which replaces it where that passes the test far better (``SelectConfig``).
       rotor_ratio: how much better: the rotor's validation error at most this fraction of the
         band's (``SelectConfig``).
+      group: effects fitted on every joint at once where nothing passes alone or in a pair on
+        the nominal model, each joint then judged against the others (``SelectConfig``; ``()``: never).
       refine_iters: Gauss-Newton steps of the start velocities of every segment a model is judged
         on (validation, the finer step's check, the held-out error). One step did not converge
         where a fitted model is sensitive to them: the focus list's 3027, a 3-link arm's band fitted
@@ -205,6 +207,7 @@ class DiagnoseConfig:
     shared_lag: bool = SelectConfig.shared_lag
     rotor: bool = SelectConfig.rotor
     rotor_ratio: float = SelectConfig.rotor_ratio
+    group: tuple = SelectConfig.group
     refine_iters: int = Fitter.refine_iters
     heldout_gain_first: float = 0.01
     heldout_gain: float = 0.05
@@ -255,6 +258,9 @@ class DiagnoseConfig:
         unknown = set(self.effects) - set(ALL_EFFECTS)
         if unknown:
             raise ValueError(f"effects: unknown effect(s) {sorted(unknown)}; the library has {', '.join(ALL_EFFECTS)}")
+        unknown = set(self.group) - set(ALL_EFFECTS)
+        if unknown:
+            raise ValueError(f"group: unknown effect(s) {sorted(unknown)}; the library has {', '.join(ALL_EFFECTS)}")
 
 
 def far_masses(nominal_refit: dict) -> str | None:
@@ -745,7 +751,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                                     freeze_at_noise=freeze, pair_screen=cfg.pair_screen,
                                     timing_relative=cfg.timing_relative, swap=cfg.swap,
                                     prune_fit=cfg.prune_fit, shared_lag=cfg.shared_lag, rotor=cfg.rotor,
-                                    rotor_ratio=cfg.rotor_ratio),
+                                    rotor_ratio=cfg.rotor_ratio, group=tuple(cfg.group)),
                        progress=lambda text: bar.step(0, text), step_level=step_level, finer=finer,
                        allowed=cfg.expressible or None, shared=_shared_lag(cfg, system, sc),
                        rotors=_rotors(cfg, system, sc))
@@ -755,7 +761,7 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         scores = [_pooled(sh, check_tiles, nr) for nr, _ in checked]
         nominal_ho, step_ho = scores[0], scores[1:]
         seg = _segment_errors(sh, checked, check_tiles)  # [1 + steps, segments]
-        keep = heldout_walk(step_ho, nominal_ho, seg[1:], [_pair_at(sel, steps, k) for k in range(len(steps))], cfg)
+        keep = heldout_walk(step_ho, nominal_ho, seg[1:], [_joins_next(sel, steps, k) for k in range(len(steps))], cfg)
         chosen = steps[keep]
         refit_worse = step_ho[0] > nominal_ho
         dropped = steps[-1].effects[len(chosen.effects):]
@@ -809,7 +815,7 @@ def heldout_walk(step_ho: list[float], nominal_ho: float, per_segment: np.ndarra
     ``step_ho [steps]``: each step's held-out NRMSE (the report's: every signal's, averaged);
     ``nominal_ho``: the model file's; ``per_segment [steps, segments]``: each step's error per
     held-out segment (``_segment_errors``); ``joins [steps]``: step k adds the first of a pair that
-    joined together (``_pair_at``). Walking from the re-fit, a step is kept while it lowers the
+    joined together (``_joins_next``). Walking from the re-fit, a step is kept while it lowers the
     error of the step before by ``heldout_gain_first`` (the first effect) or ``heldout_gain`` (a
     later one), pooled or on the typical segment (``heldout_typical``); the first that does not,
     and all after it (fitted on top of it), are dropped. Then nothing is kept whose pooled error is
@@ -823,12 +829,13 @@ def heldout_walk(step_ho: list[float], nominal_ho: float, per_segment: np.ndarra
         need = 1 - (cfg.heldout_gain_first if keep == 0 else cfg.heldout_gain)
         if lower(keep, keep + 1, need):
             keep += 1
-        elif keep + 2 < len(step_ho) and joins[keep + 1] and lower(keep, keep + 2, need):
+        elif (end := _unit_end(joins, keep + 1)) < len(step_ho) and end > keep + 1 and lower(keep, end, need):
             # the first half of a pair that joined together (neither passed alone) is judged
             # with its second, as it joined (the combos list's 6072: a rail friction alone
-            # predicts the held-out data 1% worse, with the delay beside it 96% better)
-            skipped.add(keep + 1)
-            keep += 2
+            # predicts the held-out data 1% worse, with the delay beside it 96% better); a
+            # group's first members with its last
+            skipped.update(range(keep + 1, end))
+            keep = end
         else:
             break
     while keep > 0 and step_ho[keep] > nominal_ho:
@@ -838,14 +845,22 @@ def heldout_walk(step_ho: list[float], nominal_ho: float, per_segment: np.ndarra
     return keep
 
 
-def _pair_at(sel: Selector, steps: list[Model], k: int) -> bool:
-    """``steps[k]`` adds the first of a pair that joined together (``Selector._pair``: neither
-    passed alone) and ``steps[k + 1]`` its second."""
+def _unit_end(joins: list[bool], k: int) -> int:
+    """The step that completes what step ``k`` starts: the first from ``k`` on that joins no next."""
+    while k < len(joins) and joins[k]:
+        k += 1
+    return k
+
+
+def _joins_next(sel: Selector, steps: list[Model], k: int) -> bool:
+    """``steps[k]`` adds part of effects that joined together and a later step the rest: a pair
+    (``Selector._pair``: neither passed alone) or an effect on several joints at once
+    (``Selector._group``: no joint's alone passed)."""
     if not 1 <= k < len(steps) - 1:
         return False
-    def added(i):
-        return {c.label for c in steps[i].effects} - {c.label for c in steps[i - 1].effects}
-    return frozenset(added(k) | added(k + 1)) in sel.units
+    have = {c.label for c in steps[k].effects}
+    added = have - {c.label for c in steps[k - 1].effects}
+    return any(added & u and not u <= have for u in sel.units + sel.groups)
 
 
 def _energy_step(cfg, system, sel, sh, fitter, chosen, refit, trajs, n_train, held, check_tiles, ho_base):
@@ -1251,7 +1266,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
                           "heldout_nrmse": step_ho[k], "kept": k <= keep,
                           "heldout_typical_ratio": _typical_ratio(seg[k], seg[k + 1]),
                           "heldout_segments": [float(f"{e:.4g}") for e in seg[k + 1]],
-                          "joins_next": _pair_at(sel, steps, k)})
+                          "joins_next": _joins_next(sel, steps, k)})
     fit["per_segment_before"] = [float(f"{e:.4g}") for e in seg[0]]
     nominal_refit = {n: {"nominal": float(spec[n].default), "fitted": float(z_fit[spec.index(n)]),
                          "std": chosen.result.std.get(n), "unit": spec[n].unit} for n in system.nominal}

@@ -125,7 +125,9 @@ HELD_WRIST = SERVO_ARM.replace('timestep="0.002" integrator="implicit"', 'timest
 #   jitter (each position sample taken up to this many physics steps off its instant, its time stamped so),
 #   lag_s (the command reaches the actuator through a first-order lag of this time constant),
 #   count, seconds (recordings and their length: 3 of 8 s), qfrc (a function of (qpos, qvel) giving
-#   a joint force applied at every physics step: physics the library has no name for, written here)
+#   a joint force applied at every physics step: physics the library has no name for, written here),
+#   plant (the truth's own MJCF, with bodies and joints the model lacks; the model's joints are
+#   logged, its actuators' names driven)
 PROBES = {
     "flywheel_intvelocity_friction": (FLYWHEEL, 'frictionloss="0.05"', "coulomb_friction@spin 0.05 N m",
                                       "multisine", {}),
@@ -149,7 +151,11 @@ PROBES = {
 def record(name, text, truth, drive, extras, work):
     nominal = os.path.join(work, f"{name}.xml")
     open(nominal, "w").write(text.format(truth=""))
-    m = mujoco.MjModel.from_xml_string(text.format(truth=truth))
+    m = mujoco.MjModel.from_xml_string(extras.get("plant") or text.format(truth=truth))
+    mn = mujoco.MjModel.from_xml_string(text.format(truth=""))  # what is logged: the nominal model's joints
+    logged = np.concatenate([np.arange(m.jnt_qposadr[m.joint(mn.joint(j).name).id],
+                                       m.jnt_qposadr[m.joint(mn.joint(j).name).id] + (4 if mn.jnt_type[j] == 1 else 1))
+                             for j in range(mn.njnt)])
     if "plant_dt" in extras:
         m.opt.timestep = extras["plant_dt"]
     sub = int(round(extras.get("period", 0.005) / m.opt.timestep))
@@ -167,9 +173,9 @@ def record(name, text, truth, drive, extras, work):
         freqs, phases = rng.uniform(0.2, 3, (max(m.nu, 1), 5)), rng.uniform(0, 6.28, (max(m.nu, 1), 5))
         levels = rng.uniform(-1, 1, (400, max(m.nu, 1)))
         cols = []
-        for j in range(m.njnt):
-            jn = m.joint(j).name
-            cols += [f"qpos:{jn}:{c}" for c in "qw qx qy qz".split()] if m.jnt_type[j] == 1 else [f"qpos:{jn}"]
+        for j in range(mn.njnt):
+            jn = mn.joint(j).name
+            cols += [f"qpos:{jn}:{c}" for c in "qw qx qy qz".split()] if mn.jnt_type[j] == 1 else [f"qpos:{jn}"]
         cols += [f"ctrl:{m.actuator(a).name}" for a in range(m.nu)]
         queue = [np.zeros(m.nu)] * lag
         rows, qs = [], [d.qpos.copy()]  # qs: the state at every physics step (a jittered logger samples it)
@@ -187,7 +193,7 @@ def record(name, text, truth, drive, extras, work):
                 cmd = (lo + hi) / 2 + levels[int(t / 0.25), :m.nu] * (hi - lo) / 2 * 0.8
             else:
                 cmd = np.zeros(0)
-            rows.append([t + 1.5, *rng.normal(0, 1e-3, m.nq), *cmd])
+            rows.append([t + 1.5, *rng.normal(0, 1e-3, len(logged)), *cmd])
             for _ in range(sub):
                 queue.append(cmd)
                 u_eff = u_eff + (queue.pop(0) - u_eff) * (1 - np.exp(-m.opt.timestep / extras.get("lag_s", 1e-12)))
@@ -199,7 +205,7 @@ def record(name, text, truth, drive, extras, work):
         for k, row in enumerate(rows):  # the positions, each taken jit[k] physics steps off its instant
             i = min(max(k * sub + jit[k], 0), len(qs) - 1)
             row[0] += (i - k * sub) * m.opt.timestep
-            row[1:1 + m.nq] += qs[i] + np.eye(m.nq)[0] * extras.get("offset", 0.0)
+            row[1:1 + len(logged)] += qs[i][logged] + np.eye(len(logged))[0] * extras.get("offset", 0.0)
         paths.append(os.path.join(work, f"{name}_{r}.csv"))
         np.savetxt(paths[-1], np.array(rows), delimiter=",", header="time," + ",".join(cols), comments="")
     return nominal, paths
