@@ -198,6 +198,7 @@ CASES = [
     ("nan_energy_explained", "diagnose", D + ["recordings=[a.csv]", "energy_explained=nan"], {},
      "energy_explained=nan: must be a finite number >= 0"),
     ("unknown_effect", "diagnose", D + ["recordings=[a.csv]", "effects=[none,fricton]"], {}, "unknown effect(s) ['fricton']"),
+    ("unknown_group_effect", "diagnose", D + ["recordings=[a.csv]", "group=[fricton]"], {}, "group: unknown effect(s) ['fricton']"),
     ("not_key_value", "diagnose", ["robot.xml"], {}, "argument 'robot.xml' is not of the form key=value"),
     # ---- training configs -----------------------------------------------------------------------------------
     ("train_unknown_key", "train", ["ppo.num_env=4"], {}, "Did you mean: ppo.num_envs"),

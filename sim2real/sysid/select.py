@@ -865,8 +865,8 @@ class Selector:
         return a, second
 
     def _group(self, M: Model, trials: list[Trial]):
-        """Each effect of ``SelectConfig.group`` offered on two or more joints, fitted on all of
-        them at once on top of ``M`` (the nominal model, where nothing passed alone or in a pair),
+        """Each effect of ``SelectConfig.group`` offered on two or more joints (or actuators), fitted
+        on all of them at once on top of ``M`` (the nominal model, where nothing passed alone or in a pair),
         each joint's level from its screen's start; members fitted at their absent value are left
         out and the rest fitted again. The group joins if it passes the same test against ``M`` (``_accept``). Returns ``(the model, its
         forward path from M (a fit of each prefix), a round per member after the first)`` or None.
