@@ -814,8 +814,8 @@ def heldout_walk(step_ho: list[float], nominal_ho: float, per_segment: np.ndarra
 
     ``step_ho [steps]``: each step's held-out NRMSE (the report's: every signal's, averaged);
     ``nominal_ho``: the model file's; ``per_segment [steps, segments]``: each step's error per
-    held-out segment (``_segment_errors``); ``joins [steps]``: step k adds the first of a pair that
-    joined together (``_joins_next``). Walking from the re-fit, a step is kept while it lowers the
+    held-out segment (``_segment_errors``); ``joins [steps]``: step k adds part of a pair or group
+    that joined together, a later step the rest (``_joins_next``). Walking from the re-fit, a step is kept while it lowers the
     error of the step before by ``heldout_gain_first`` (the first effect) or ``heldout_gain`` (a
     later one), pooled or on the typical segment (``heldout_typical``); the first that does not,
     and all after it (fitted on top of it), are dropped. Then nothing is kept whose pooled error is

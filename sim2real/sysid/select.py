@@ -865,15 +865,15 @@ class Selector:
         return a, second
 
     def _group(self, M: Model, trials: list[Trial]):
-        """Each effect of ``SelectConfig.group`` offered on two or more joints (or actuators), fitted
-        on all of them at once on top of ``M`` (the nominal model, where nothing passed alone or in a pair),
-        each joint's level from its screen's start; members fitted at their absent value are left
-        out and the rest fitted again. The group joins if it passes the same test against ``M`` (``_accept``). Returns ``(the model, its
-        forward path from M (a fit of each prefix), a round per member after the first)`` or None.
-        The backward check then judges each member against the others (``_prune``): a joint
-        that does not rub is dropped there."""
+        """Each effect of ``SelectConfig.group`` offered on two or more joints (or actuators),
+        fitted on all of them at once on top of ``M`` (the nominal model, where nothing passed
+        alone or in a pair), each member from its screen's start; members fitted at their absent
+        value are left out and the rest fitted again. The group joins if it passes the same test
+        against ``M`` (``_accept``). Returns ``(the model, its forward path from M (a fit of each
+        prefix), a round per member after the first)`` or None. The backward check then judges
+        each member against the others (``_prune``): a joint that does not rub is dropped there."""
+        order = {c.label: i for i, c in enumerate(self.cands)}
         for effect in self.cfg.group:
-            order = {c.label: i for i, c in enumerate(self.cands)}
             members = sorted([t for t in trials if t.candidate.effect == effect], key=lambda t: order[t.candidate.label])
             if len(members) < 2:
                 continue
