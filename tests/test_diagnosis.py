@@ -785,6 +785,19 @@ def test_friction_on_every_joint_at_once_where_no_joint_alone_passes():
     # j3 fitted at 0 (absent): the group is j1 and j2, fitted again without it
     (G, path, rows), M = run({**fits, key("j1", "j2"): (1000.0, 10 + rng.uniform(0, 1, 10), 0.0, 0.1)}, absent=("j3",))
     assert [c.label for c in G.effects] == ["coulomb_friction@j1", "coulomb_friction@j2"] and len(rows) == 1
+    # the held-out walk's joins (``_joins_next``): each step that adds a member with the next member
+    from sim2real.sysid.diagnose import _joins_next
+
+    X = Candidate("action_delay", "", ("action_delay",), ((1.0,),), (1.0,), ((0.0, 8.0),))
+    path_of = lambda *effects: [types.SimpleNamespace(effects=list(effects[:k])) for k in range(len(effects) + 1)]  # noqa: E731
+    sel = types.SimpleNamespace(units=[], groups=[key("j1", "j2", "j3")])
+    steps = path_of(*J, X)
+    assert [_joins_next(sel, steps, k) for k in range(len(steps))] == [False, True, True, False, False]
+    steps = path_of(J[1], J[2], X)   # j1 dropped by the backward check, a delay named after the group
+    assert [_joins_next(sel, steps, k) for k in range(len(steps))] == [False, True, False, False]
+    sel = types.SimpleNamespace(units=[frozenset({"coulomb_friction@j1", "action_delay"})], groups=[])
+    assert [_joins_next(sel, path_of(J[0], D), k) for k in range(3)] == [False] * 3   # a pair's member swapped
+    assert [_joins_next(sel, path_of(J[0], X), k) for k in range(3)] == [False, True, False]
 
 
 def _fitted_on_top(fit):

@@ -255,12 +255,10 @@ class DiagnoseConfig:
         for key in ("num_windows", "top", "max_effects", "backlash_starts", "refine_iters"):
             if getattr(self, key) < 1:
                 raise ValueError(f"{key}={getattr(self, key)}: must be >= 1")
-        unknown = set(self.effects) - set(ALL_EFFECTS)
-        if unknown:
-            raise ValueError(f"effects: unknown effect(s) {sorted(unknown)}; the library has {', '.join(ALL_EFFECTS)}")
-        unknown = set(self.group) - set(ALL_EFFECTS)
-        if unknown:
-            raise ValueError(f"group: unknown effect(s) {sorted(unknown)}; the library has {', '.join(ALL_EFFECTS)}")
+        for key in ("effects", "group"):
+            unknown = set(getattr(self, key)) - set(ALL_EFFECTS)
+            if unknown:
+                raise ValueError(f"{key}: unknown effect(s) {sorted(unknown)}; the library has {', '.join(ALL_EFFECTS)}")
 
 
 def far_masses(nominal_refit: dict) -> str | None:
@@ -814,9 +812,9 @@ def heldout_walk(step_ho: list[float], nominal_ho: float, per_segment: np.ndarra
 
     ``step_ho [steps]``: each step's held-out NRMSE (the report's: every signal's, averaged);
     ``nominal_ho``: the model file's; ``per_segment [steps, segments]``: each step's error per
-    held-out segment (``_segment_errors``); ``joins [steps]``: step k adds part of a pair or group
-    that joined together, a later step the rest (``_joins_next``). Walking from the re-fit, a step is kept while it lowers the
-    error of the step before by ``heldout_gain_first`` (the first effect) or ``heldout_gain`` (a
+    held-out segment (``_segment_errors``); ``joins [steps]``: step k adds a member of a pair or
+    group that joined together and step k + 1 another (``_joins_next``). Walking from the re-fit,
+    a step is kept while it lowers the error of the step before by ``heldout_gain_first`` (the first effect) or ``heldout_gain`` (a
     later one), pooled or on the typical segment (``heldout_typical``); the first that does not,
     and all after it (fitted on top of it), are dropped. Then nothing is kept whose pooled error is
     above the model file's: a model never predicts the held-out data worse than the one given."""
@@ -829,7 +827,7 @@ def heldout_walk(step_ho: list[float], nominal_ho: float, per_segment: np.ndarra
         need = 1 - (cfg.heldout_gain_first if keep == 0 else cfg.heldout_gain)
         if lower(keep, keep + 1, need):
             keep += 1
-        elif (end := _unit_end(joins, keep + 1)) < len(step_ho) and end > keep + 1 and lower(keep, end, need):
+        elif joins[keep + 1] and (end := _unit_end(joins, keep + 1)) < len(step_ho) and lower(keep, end, need):
             # the first half of a pair that joined together (neither passed alone) is judged
             # with its second, as it joined (the combos list's 6072: a rail friction alone
             # predicts the held-out data 1% worse, with the delay beside it 96% better); a
@@ -853,14 +851,15 @@ def _unit_end(joins: list[bool], k: int) -> int:
 
 
 def _joins_next(sel: Selector, steps: list[Model], k: int) -> bool:
-    """``steps[k]`` adds part of effects that joined together and a later step the rest: a pair
+    """``steps[k]`` and ``steps[k + 1]`` each add a member of effects that joined together: a pair
     (``Selector._pair``: neither passed alone) or an effect on several joints at once
-    (``Selector._group``: no joint's alone passed)."""
+    (``Selector._group``: no joint's alone passed; its members the backward check kept)."""
     if not 1 <= k < len(steps) - 1:
         return False
-    have = {c.label for c in steps[k].effects}
-    added = have - {c.label for c in steps[k - 1].effects}
-    return any(added & u and not u <= have for u in sel.units + sel.groups)
+    def added(i):
+        return {c.label for c in steps[i].effects} - {c.label for c in steps[i - 1].effects}
+    a, b = added(k), added(k + 1)
+    return bool(a and b) and any(a | b <= u for u in sel.units + sel.groups)
 
 
 def _energy_step(cfg, system, sel, sh, fitter, chosen, refit, trajs, n_train, held, check_tiles, ho_base):

@@ -888,10 +888,7 @@ class Selector:
                 cands = [c for c in cands if c not in absent]
                 if len(cands) < 2:
                     continue
-                idx = self.spec.indices([p for c in absent for p in c.params])
-                z1 = G.z.copy()
-                z1[idx] = self.spec.default[idx]
-                G = self.fit(M.effects + cands, z1, G.result.v0)
+                G = self.fit(M.effects + cands, self._neutral(G.z, absent), G.result.v0)
             self.validate([G])
             ok, ratio, t, note = self._accept(M, G, False)
             if not ok:
@@ -1130,13 +1127,17 @@ class Selector:
         return [n for n in M.params if n.startswith("mass:")
                 and is_far_mass(float(self.spec[n].default), float(M.z[self.spec.index(n)]))]
 
+    def _neutral(self, z: np.ndarray, drop: list[Candidate]) -> np.ndarray:
+        """A copy of ``z`` with the parameters of the effects ``drop`` back at their neutral values."""
+        z = z.copy()
+        idx = self.spec.indices([p for c in drop for p in c.params])
+        z[idx] = self.spec.default[idx]
+        return z
+
     def _without(self, M: Model, c: Candidate) -> Model:
         """``M`` re-fitted without effect ``c`` (its parameters back at their neutral values), not
         validated: the swap only screens and fits on it (``_without_all`` validates what it returns)."""
-        z0 = M.z.copy()
-        idx = self.spec.indices(list(c.params))
-        z0[idx] = self.spec.default[idx]
-        return self.fit([e for e in M.effects if e is not c], z0, M.result.v0)
+        return self.fit([e for e in M.effects if e is not c], self._neutral(M.z, [c]), M.result.v0)
 
     def _units(self, M: Model) -> list[list[Candidate]]:
         """``M``'s effects as the backward check judges them: one by one, except a pair that

@@ -153,9 +153,8 @@ def record(name, text, truth, drive, extras, work):
     open(nominal, "w").write(text.format(truth=""))
     m = mujoco.MjModel.from_xml_string(extras.get("plant") or text.format(truth=truth))
     mn = mujoco.MjModel.from_xml_string(text.format(truth=""))  # what is logged: the nominal model's joints
-    logged = np.concatenate([np.arange(m.jnt_qposadr[m.joint(mn.joint(j).name).id],
-                                       m.jnt_qposadr[m.joint(mn.joint(j).name).id] + (4 if mn.jnt_type[j] == 1 else 1))
-                             for j in range(mn.njnt)])
+    adr = [m.jnt_qposadr[m.joint(mn.joint(j).name).id] for j in range(mn.njnt)]   # (in the plant's qpos)
+    logged = np.concatenate([np.arange(a, a + (4 if mn.jnt_type[j] == 1 else 1)) for j, a in enumerate(adr)])
     if "plant_dt" in extras:
         m.opt.timestep = extras["plant_dt"]
     sub = int(round(extras.get("period", 0.005) / m.opt.timestep))
