@@ -115,9 +115,10 @@ CASES = [
      "duplicated time"),
     ("backwards_time", "diagnose", D + ["recordings=[r.csv]"], {"r.csv": _rows(lambda L: _set(L, 21, 0, "0.05"))},
      "time goes backwards at data row 21"),
-    ("gap_in_time", "diagnose", D + ["recordings=[r.csv]"],
-     {"r.csv": _rows(lambda L: [_set(L, k, 0, f"{(k - 1) * 0.01 + 0.5:.2f}") for k in range(30, 61)])},
-     "non-uniform sampling at data row 30"),
+    ("gaps_in_time", "diagnose", D + ["recordings=[r.csv]"],   # (a longer piece would be diagnosed: load_pieces)
+     {"r.csv": _rows(lambda L: [_set(L, k, 0, f"{(k - 1) * 0.01 + 0.5 * ((k >= 15) + (k >= 30) + (k >= 45)):.2f}")
+                                for k in range(1, 61)])},
+     "samples lost at 3 places (data rows 15, 30, 45), leaving no piece of 20 samples"),
     ("angle_in_degrees", "diagnose", ["model=limited.xml", "recordings=[r.csv]", "progress=false"],
      {"limited.xml": open(PENDULUM).read().replace('limited="false"', 'range="-1.5 1.5"'),
       "r.csv": "time,qpos:hinge,ctrl:motor\n" + "".join(f"{k * 0.01:.2f},{60 * np.sin(k / 9):.6f},0.2\n" for k in range(60))},

@@ -443,6 +443,66 @@ def test_fitted_xml_scales_the_gain_law_as_the_simulator_does(tmp_path):
     assert fitted.actuator_biasprm[1, 2] == pytest.approx(3.0 * declared.actuator_biasprm[1, 2])
 
 
+def test_contacts_mjx_cannot_compute_are_left_out_where_no_recorded_pose_touches(tmp_path):
+    """A cylinder link beside a box on the world: MJX has no cylinder-box collision and its
+    ``put_model`` refuses the model. The pair is left out (with a note); a recording that swings
+    the link into the box is refused at the row where they touch; a declared ``<pair>`` of them
+    is refused."""
+    from sim2real.sysid.system import ModelError, System
+
+    xml = """<mujoco><worldbody><geom name="stop" type="box" pos="0.3 0 1" size="0.05 0.05 0.05"/>
+      <body name="rod" pos="0 0 1"><joint name="hinge" axis="0 1 0"/>
+      <geom name="link" type="cylinder" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/></body></worldbody>
+      <actuator><motor name="m" joint="hinge"/></actuator>{pair}</mujoco>"""
+    path = str(tmp_path / "stop.xml")
+    open(path, "w").write(xml.format(pair=""))
+    system = System(path, dt=0.01)
+    assert len(system.left_out_contacts) == 1
+    assert any("MJX cannot collide cylinder 'link' of rod with box 'stop' of world" in n and "'world' and 'rod'" in n
+               for n in system.notes)
+    angle = np.linspace(0.0, -1.6, 100)   # (the link's tip reaches the box near -pi/2)
+    save_csv(str(tmp_path / "r.csv"), 0.01 * np.arange(100), {"qpos:hinge": angle, "ctrl:m": 0 * angle})
+    # the first row where the link's axis (x-z plane) comes within its radius of the box's square
+    s_ = np.linspace(0, 0.3, 301)[None]
+    x, z = s_ * np.sin(-angle)[:, None], 1 - s_ * np.cos(angle)[:, None]
+    gap = np.hypot(np.maximum(np.abs(x - 0.3) - 0.05, 0), np.maximum(np.abs(z - 1) - 0.05, 0)).min(1)
+    touch = int(np.argmax(gap <= 0.02))
+    with pytest.raises(ModelError, match=r"r.csv: at data row (\d+) .*cylinder 'link' of rod touches box 'stop'") as e:
+        system.check_recording_covers(load(str(tmp_path / "r.csv"), system.mj))
+    assert abs(int(e.value.args[0].split("at data row ")[1].split()[0]) - (touch + 1)) <= 1   # (flat end, round model)
+    save_csv(str(tmp_path / "r.csv"), 0.01 * np.arange(100), {"qpos:hinge": angle / 2, "ctrl:m": 0 * angle})
+    system.check_recording_covers(load(str(tmp_path / "r.csv"), system.mj))   # (never nearer than 3 cm)
+    open(path, "w").write(xml.format(pair='<contact><pair geom1="link" geom2="stop"/></contact>'))
+    with pytest.raises(ModelError, match="the contact pair of cylinder 'link' of rod and box 'stop' of world is declared"):
+        System(path, dt=0.01)
+
+
+def test_contacts_no_recorded_pose_comes_near_are_left_out_of_the_simulation(tmp_path):
+    """A capsule link and a sphere on the world that MJX would collide at every step: where the
+    recorded swing keeps them 5 cm apart or more their contacts are left out (the System built
+    with ``apart`` has no contact pair); a swing that brings the link
+    within 1 cm keeps them."""
+    from sim2real.sysid.system import System, _contact_pairs
+
+    path = str(tmp_path / "ball.xml")
+    open(path, "w").write("""<mujoco><worldbody><geom name="ball" type="sphere" pos="0.28 0 1" size="0.05"/>
+      <body name="rod" pos="0 0 1"><joint name="hinge" axis="0 1 0"/>
+      <geom name="link" type="capsule" fromto="0 0 0 0 0 -0.2" size="0.02" mass="0.4"/></body></worldbody>
+      <actuator><motor name="m" joint="hinge"/></actuator></mujoco>""")
+    system = System(path, dt=0.01)
+    assert len(_contact_pairs(system.mj)) == 1
+    t = 0.01 * np.arange(100)
+
+    def swing(amplitude):   # (the link's tip, nearest the ball at the swing's end, moves up to 9 mm a sample)
+        save_csv(str(tmp_path / "r.csv"), t, {"qpos:hinge": -amplitude * np.sin(t * 3), "ctrl:m": 0 * t})
+        return system.bodies_apart([load(str(tmp_path / "r.csv"), system.mj)])
+
+    apart, note = swing(0.6)   # nearest: |(0.28, 1) - (0.2 sin 0.6, 1 - 0.2 cos 0.6)| - 0.07 = 0.165 m
+    assert apart == ((0, 1),) and "contacts of 1 of 1 body pairs left out" in note and "'world'-'rod'" in note
+    assert _contact_pairs(System(path, dt=0.01, apart=apart).mj) == []
+    assert swing(1.5) == ((), "")   # nearest 0.012 m: within 1 cm and a sample's travel
+
+
 def test_fitted_xml_of_a_model_with_meshes_loads_from_the_diagnosis_folder(tmp_path):
     """A link drawn from a mesh under the model's ``meshdir``: the fitted file, written in another
     folder, finds the same mesh (it did not load there: "Error opening file 'assets/link.obj'")."""
@@ -922,3 +982,23 @@ def test_jittered_time_stamps_are_resampled_onto_the_median_grid(tmp_path):
     save_csv(path, np.delete(grid, range(150, 154)), {"qpos:hinge": np.zeros(396), "ctrl:motor": np.zeros(396)})
     with pytest.raises(RecordingError, match="non-uniform sampling at data row 151.*samples lost"):
         load(path, m)
+
+
+def test_a_recording_that_lost_samples_is_cut_into_pieces(tmp_path):
+    """A logger that lost 4 samples after row 150 and 30 after row 380 (jittered stamps beside):
+    ``load_all`` gives the pieces as recordings of their own, named by their rows, each on its own
+    grid, nothing interpolated over a gap; a piece under 20 samples is left out, and the note says
+    where the file was cut."""
+    m = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, "pendulum.xml"))
+    k = np.delete(np.arange(430), [*range(150, 154), *range(390, 420)])   # 396 samples left
+    t = 1.0 + 0.005 * (k + np.random.default_rng(1).uniform(-0.2, 0.2, len(k)))
+    path = str(tmp_path / "drops.csv")
+    save_csv(path, t, {"qpos:hinge": np.sin(t), "ctrl:motor": np.cos(7 * t)})
+    pieces = load_all([path], m)
+    assert [p.rows for p in pieces] == ["1-150", "151-386"] and [p.name for p in pieces] == [
+        "drops[rows 1-150]", "drops[rows 151-386]"]
+    assert [len(p) for p in pieces] == [150, 236]
+    np.testing.assert_allclose(pieces[1].time[[0, -1]], [1.0 + 0.005 * 154, 1.0 + 0.005 * 389], atol=0.0006)
+    np.testing.assert_allclose(pieces[1].get("qpos", "hinge"), np.sin(pieces[1].time), atol=1e-3)  # (edges held)
+    assert "cut into 2 pieces, data rows 1-150, 151-386 (10 samples in pieces under 20 left out)" in pieces[0].notes[0]
+    assert "resampled onto it" in pieces[1].notes[-1]

@@ -622,7 +622,6 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         build = functools.partial(System, cfg.model, dt=dt, coulomb_eps=cfg.coulomb_eps, max_delay=max_delay,
                                   mass_above=cfg.mass_above if "mass_offset" in cfg.effects else 0.0)
         system = build()
-        built_notes = len(system.notes)  # (the model's own; the data's are added below)
         unknown = [t for t in cfg.targets if t not in {*system.joints, *system.actuators, *system.bodies}]
         if unknown:  # (before any simulation: a misspelt name costs nothing)
             raise ValueError(f"targets: {unknown} name no joint, actuator or body of {cfg.model} (joints: "
@@ -630,6 +629,12 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                              f"bodies: {', '.join(system.bodies[1:])})")
         for r in train + held:
             system.check_recording_covers(r)
+        apart, apart_note = system.bodies_apart(train + held)
+        if apart:  # (contacts no recorded pose comes near, left out of every simulation: System.bodies_apart)
+            build = functools.partial(build, apart=apart)
+            system = build()
+        built_notes = len(system.notes)  # (the model's own; the data's are added below)
+        system.notes += [apart_note] if apart else []
         window = int(round(cfg.window_seconds / dt)) | 1 if cfg.window_seconds > 0 else None
         trajs = [from_recording(r, system, window) for r in train + held]
         # (what reading them did: jittered stamps resampled, a wrapped angle unwrapped)
@@ -804,6 +809,11 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         return d
     finally:
         bar.close()
+
+
+def _where(rec) -> str:
+    """A recording's file, and its rows where it is a piece of one (``recordings.load_pieces``)."""
+    return f"{rec.path}[rows {rec.rows}]" if rec.rows else rec.path
 
 
 def heldout_walk(step_ho: list[float], nominal_ho: float, per_segment: np.ndarray, joins: list[bool],
@@ -1310,7 +1320,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         notes.append(f"fitted.xml was not written: {type(e).__name__}: {e}")
     d = {
         "model": os.path.abspath(cfg.model),
-        "recordings": [r.path for r in train], "heldout": [r.path for r in held],
+        "recordings": [_where(r) for r in train], "heldout": [_where(r) for r in held],
         "sample_period": trajs[0].dt, "physics_step": system.h, "substeps": system.substeps,
         "smoothing_window_samples": [t.window for t in trajs],
         "horizon_samples": sh.H, "step_level": sel.step_level, "segments": {k: int(len(sh.tiles.of(k))) for k in ("fit", "val", "heldout")},

@@ -5,7 +5,8 @@ Format (README, "Recording format"): one table per file, a row per sample.
 =====================  ===========================================================
 column                 meaning
 =====================  ===========================================================
-``time``               seconds, strictly increasing, uniform sample rate (``MAX_PERIOD_S``)
+``time``               seconds, strictly increasing, uniform sample rate (``MAX_PERIOD_S``; jittered
+                       stamps are resampled, lost samples cut the file into pieces: ``load_pieces``)
 ``qpos:<joint>``       measured joint position (m or rad), at least one
 ``qvel:<joint>``       measured joint velocity (optional; else differentiated)
 ``ctrl:<actuator>``    command sent to the actuator, one per actuator of the model
@@ -64,10 +65,12 @@ class Recording:
     time: np.ndarray
     columns: dict[str, np.ndarray]
     notes: list[str] = dataclasses.field(default_factory=list)  # what loading did to the data
+    rows: str = ""  # a piece of a file cut at lost samples (``load_pieces``): its data rows, "801-1570"
 
     @property
     def name(self) -> str:
-        return os.path.splitext(os.path.basename(self.path))[0]
+        base = os.path.splitext(os.path.basename(self.path))[0]
+        return f"{base}[rows {self.rows}]" if self.rows else base
 
     @property
     def dt(self) -> float:
@@ -229,7 +232,20 @@ def _read_table(path: str) -> dict[str, np.ndarray]:
 
 
 def load(path: str, model: mujoco.MjModel) -> Recording:
-    """Read and validate one recording against ``model`` (names, shapes, values, time)."""
+    """Read and validate one recording against ``model`` (names, shapes, values, time); one whose
+    logger lost samples is refused (``load_pieces`` cuts it there)."""
+    return _load(path, model, cut=False)[0]
+
+
+def load_pieces(path: str, model: mujoco.MjModel) -> list[Recording]:
+    """``load``, with a recording whose logger lost samples (a step over ``MAX_GAP`` median steps:
+    a dropped packet, a paused bag) cut there into pieces, each a recording of its own: nothing is
+    interpolated over the gap (the motion in it is unknown), and each piece is simulated from its
+    own first state. A piece under 20 samples is left out; ``notes`` says where it was cut."""
+    return _load(path, model, cut=True)
+
+
+def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
     cols = _read_table(path)
     if "time" not in cols:
         raise RecordingError(f"{path}: no 'time' column (columns: {', '.join(cols)})")
@@ -278,10 +294,12 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
         row = int(np.argmax(dt < 0)) + 1
         raise RecordingError(f"{path}: time goes backwards at data row {row + 1} ({t[row]} -> {t[row + 1]})")
     med = np.median(dt)
-    if dt.max() > MAX_GAP * med:
-        row = int(np.argmax(dt)) + 1
+    starts = np.flatnonzero(dt > MAX_GAP * med) + 1  # the first row after each gap
+    if len(starts) and not cut:
+        row = int(starts[0])
         raise RecordingError(f"{path}: non-uniform sampling at data row {row + 1}: step {dt[row - 1]:.6g} s "
                              f"vs median {med:.6g} s (samples lost: cut the recording there, or resample it)")
+    bounds = list(zip([0, *starts], [*starts, n]))  # [first, end) rows of each piece
     # a limited joint's position far outside its range is in other units (a hinge logged in
     # degrees reads +-150 against +-2.6 rad); the physics keeps a joint near its range, so a
     # sample past it by more than the range's whole span is refused
@@ -307,15 +325,34 @@ def load(path: str, model: mujoco.MjModel) -> Recording:
                                  + (f"; or the model's range was written in radians ([{d_lo:.4g}, {d_hi:.4g}], which "
                                     "the recording fits) and read as degrees: MuJoCo reads MJCF angles in degrees "
                                     "unless <compiler angle=\"radian\"/>" if in_rad else ""))
-    _check_velocity_scale(path, model, t, cols)
+    for a, b in bounds:  # (a velocity integrated over a gap would compare with nothing)
+        _check_velocity_scale(path, model, t[a:b], {k: v[a:b] for k, v in cols.items()})
     steps = med / model.opt.timestep
     if med > MAX_PERIOD_S or steps > MAX_STEPS_PER_SAMPLE:
         raise RecordingError(f"{path}: column 'time': the samples are {med:.6g} s apart ({steps:.0f} of the model's "
                              f"{model.opt.timestep:g} s physics steps; at most {MAX_PERIOD_S:g} s and "
                              f"{MAX_STEPS_PER_SAMPLE} steps): time must be in seconds (milliseconds: divide by 1000; "
                              f"nanosecond stamps: by 1e9)")
-    rec = Recording(path, t, cols)
-    step, off = _grid(t)
+    if len(bounds) == 1:
+        return [_on_grid(Recording(path, t, cols), model)]
+    kept = [(a, b) for a, b in bounds if b - a >= 20]
+    if not kept:
+        raise RecordingError(f"{path}: samples lost at {len(starts)} places (data rows "
+                             f"{', '.join(str(int(r) + 1) for r in starts[:5])}{', ...' if len(starts) > 5 else ''}), "
+                             "leaving no piece of 20 samples or more")
+    base = os.path.splitext(os.path.basename(path))[0]
+    note = (f"{base}: samples lost at {len(starts)} place{'s' if len(starts) > 1 else ''} (the longest gap "
+            f"{dt.max():.4g} s, {dt.max() / med:.0f} steps): cut into {len(kept)} pieces, data rows "
+            + ", ".join(f"{a + 1}-{b}" for a, b in kept)
+            + (f" ({sum(b - a for a, b in bounds) - sum(b - a for a, b in kept)} samples in pieces under 20 left out)"
+               if len(kept) < len(bounds) else "") + ", each simulated from its own first state")
+    return [_on_grid(Recording(path, t[a:b], {k: v[a:b] for k, v in cols.items()}, [note] if i == 0 else [],
+                               rows=f"{a + 1}-{b}"), model) for i, (a, b) in enumerate(kept)]
+
+
+def _on_grid(rec: Recording, model: mujoco.MjModel) -> Recording:
+    """``rec``, resampled onto the uniform grid of its stamps where they lie off it (``_grid``)."""
+    step, off = _grid(rec.time)
     return resample(rec, model, step, off) if np.abs(off).max() > UNIFORM * step else rec
 
 
@@ -417,7 +454,8 @@ def resample(rec: Recording, model: mujoco.MjModel, step: float, off: np.ndarray
         out[name] = np.angle(np.exp(1j * x)) if wrapped else x
     return Recording(rec.path, grid, out, rec.notes + [
         f"{rec.name}: time stamps up to {np.abs(off).max() / step:.0%} of a step off the {step:.6g} s grid: "
-        "resampled onto it (measurements interpolated, each command taken from the row nearest its instant)"])
+        "resampled onto it (measurements interpolated, each command taken from the row nearest its instant)"],
+        rows=rec.rows)
 
 
 def check_sample_rate(recs, dt: float, reference: str) -> None:
@@ -434,7 +472,7 @@ def load_all(paths, model: mujoco.MjModel, what: str = "recordings") -> list[Rec
         paths = [paths]
     if not paths:
         raise RecordingError(f"no {what} given")
-    recs = [load(p, model) for p in paths]
+    recs = [r for p in paths for r in load_pieces(p, model)]
     ref = recs[0]
     check_sample_rate(recs[1:], ref.dt, ref.path)
     for r in recs[1:]:

@@ -79,6 +79,65 @@ def _load(xml_path: str) -> mujoco.MjModel:
         raise ModelError(f"{xml_path}: cannot compile the MJCF: {e}") from None
 
 
+def _geom_label(m: mujoco.MjModel, g: int) -> str:
+    shape = mujoco.mjtGeom(int(m.geom_type[g])).name.removeprefix("mjGEOM_").lower()
+    body = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, int(m.geom_bodyid[g])) or f"body #{m.geom_bodyid[g]}"
+    return f"{shape} '{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f'#{g}'}' of {body}"
+
+
+def _contact_pairs(m: mujoco.MjModel) -> list[tuple[int, int, int]]:
+    """The geom pairs MJX collides at every physics step, whether or not they touch: ``(geom1,
+    geom2, declared pair id or -1)`` (MJX's own filter: the pairs ``mjx.put_model`` checks)."""
+    from mujoco.mjx._src import collision_driver as cd
+
+    return [(int(g1), int(g2), int(ip)) for g1, g2, ip in cd.geom_pairs(m)]
+
+
+def _leave_out_contacts(m: mujoco.MjModel, xml_path: str, notes: list[str], apart=()):
+    """``m`` with contacts left out of the simulation, and the geom pairs left out that MJX cannot
+    collide ``[(g1, g2)]`` (``check_recording_covers`` refuses a recording in which they touch).
+
+    Left out are the bodies (an ``<exclude>`` of the two, which leaves out every geom pair between
+    them) of (a) a pair of shapes MJX has no collision function for (a cylinder and a box, in MuJoCo
+    4.0), for which ``mjx.put_model`` refuses the whole model although most arms never bring
+    those links together; a declared ``<pair>`` of them is the user's word that they touch, and is
+    refused; and (b) ``apart``: body-id pairs no recorded pose brings near (``bodies_apart``).
+    Why (b): MJX collides every candidate pair and carries its contacts through the constraint
+    solver at every step, touching or not: a 6-joint arm with 19 contact slots ran 15x slower."""
+    from mujoco.mjx._src import collision_driver as cd
+
+    pairs = _contact_pairs(m)
+    bad = [(g1, g2, ip) for g1, g2, ip in pairs if not cd.has_collision_fn(*m.geom_type[[g1, g2]])]
+    for g1, g2, ip in bad:
+        if ip >= 0:
+            raise ModelError(f"{xml_path}: the contact pair of {_geom_label(m, g1)} and {_geom_label(m, g2)} is declared, "
+                             "but MJX cannot collide these shapes; give one of them a sphere, capsule or box")
+    unsupported = {tuple(sorted((int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2])))) for g1, g2, _ in bad}
+    bodies = sorted(unsupported | {tuple(sorted(p)) for p in apart})
+    if not bodies:
+        return m, []
+    try:
+        spec = mujoco.MjSpec.from_file(xml_path)
+        for b1, b2 in bodies:
+            names = []
+            for b in (b1, b2):
+                if not spec.bodies[b].name:  # (an exclusion names its bodies)
+                    spec.bodies[b].name = f"sim2real_body{b}"
+                names.append(spec.bodies[b].name)
+            spec.add_exclude(bodyname1=names[0], bodyname2=names[1])
+        m2 = spec.compile()
+    except Exception as e:
+        raise ModelError(f"{xml_path}: leaving the contacts of bodies {bodies} out of the simulation failed ({e})") from None
+    if bad:
+        notes.append("MJX cannot collide " + "; ".join(f"{_geom_label(m, g1)} with {_geom_label(m, g2)}" for g1, g2, _ in bad)
+                     + ": contacts between " + ", ".join(f"'{m2.body(b1).name}' and '{m2.body(b2).name}'"
+                                                         for b1, b2 in sorted(unsupported))
+                     + " are left out of the simulation (every recorded pose checked: their geoms never touch)")
+    left_out = [(g1, g2) for g1, g2, _ in pairs if tuple(sorted((int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2]))))
+                in unsupported]
+    return m2, left_out
+
+
 class System:
     """Static structure for identification of one MJCF at one sample period.
 
@@ -94,15 +153,19 @@ class System:
       mass_above: a body's re-fitted mass may rise to this many times the model's (0: to the
         mass kind's own bound, 1e3 times); the diagnosis sets it where a payload is searched
         (``DiagnoseConfig.mass_above``).
+      apart: body-id pairs whose contacts are left out of the simulation (``bodies_apart``).
+      left_out_contacts: the geom pairs MJX cannot collide, left out (``_leave_out_contacts``).
     """
 
     def __init__(self, xml_path: str, dt: float | None = None, coulomb_eps: float = 1e-3, max_delay: int = 8,
-                 refit_gains: bool = False, substeps: int | None = None, mass_above: float = 0.0):
+                 refit_gains: bool = False, substeps: int | None = None, mass_above: float = 0.0,
+                 apart: tuple = ()):
         m = _load(xml_path)
         self.xml_path = xml_path
         self.mass_above = float(mass_above)
         self.notes: list[str] = []
         check_model(m, xml_path)
+        m, self.left_out_contacts = _leave_out_contacts(m, xml_path, self.notes, apart)
         self.columns = ModelColumns(m, xml_path)
         jn = self.columns.joints
         self._adapt(m, dt, substeps)
@@ -215,8 +278,61 @@ class System:
         return f"coulomb:{joint}" in self.nominal
 
     def check_recording_covers(self, rec) -> None:
-        """Every joint must be measured (``trajectory.ModelColumns``)."""
+        """Every joint must be measured (``trajectory.ModelColumns``); and where contacts were left
+        out of the simulation that MJX cannot collide (``_leave_out_contacts``), no recorded pose may bring
+        their geoms together (within their margins)."""
         self.columns.check_recording_covers(rec)
+        if not self.left_out_contacts:
+            return
+        m = self.mj
+        for k, d in self._poses(rec):
+            for g1, g2 in self.left_out_contacts:
+                reach = float(m.geom_margin[g1] + m.geom_margin[g2])
+                if (dist := mujoco.mj_geomDistance(m, d, g1, g2, reach + 0.01, None)) <= reach:
+                    raise ModelError(
+                        f"{rec.path}: at data row {k + 1} (t = {rec.time[k]:.4g} s) {_geom_label(m, g1)} touches "
+                        f"{_geom_label(m, g2)} (distance {dist:.3g} m), and MJX cannot collide these shapes; give "
+                        "one of them a sphere, capsule or box in the model")
+
+    def _poses(self, rec):
+        """Each recorded pose of ``rec``: ``(row, MjData)``, the bodies and geoms placed (one MjData, reused)."""
+        d = mujoco.MjData(self.mj)
+        for k, q in enumerate(self.columns.arrays(rec)[0]):
+            d.qpos[:] = q
+            mujoco.mj_kinematics(self.mj, d)
+            yield k, d
+
+    def bodies_apart(self, recs, reach: float = 0.01) -> tuple[tuple[tuple[int, int], ...], str]:
+        """The body-id pairs whose geoms MJX would collide at every step but no pose of ``recs``
+        brings within ``reach`` (m) of each other beyond their margins and the farthest any geom
+        moves in one sample (``System(apart=...)`` leaves their contacts out), and a note saying
+        so. A body pair with one geom pair near, or a declared ``<pair>``, keeps all its contacts."""
+        pairs = [(g1, g2) for g1, g2, ip in _contact_pairs(self.mj) if ip < 0]
+        if not pairs:
+            return (), ""
+        m = self.mj
+        g1s, g2s = (np.array(x) for x in zip(*pairs))
+        closest = np.full(len(pairs), np.inf)
+        travel = 0.0
+        for rec in recs:
+            prev = None
+            for _, d in self._poses(rec):
+                if prev is not None:
+                    travel = max(travel, float(np.abs(d.geom_xpos - prev).max()))
+                prev = d.geom_xpos.copy()
+                for i, (g1, g2) in enumerate(pairs):
+                    closest[i] = min(closest[i], mujoco.mj_geomDistance(m, d, g1, g2, 1.0, None))
+        need = m.geom_margin[g1s] + m.geom_margin[g2s] + reach + travel
+        key = [tuple(sorted((int(m.geom_bodyid[a]), int(m.geom_bodyid[b])))) for a, b in pairs]
+        near = {k for k, c, n in zip(key, closest, need) if c <= n}
+        apart = tuple(sorted(set(key) - near))
+        if not apart:
+            return (), ""
+        far = min(c for k, c in zip(key, closest) if k in apart)
+        return apart, (f"contacts of {len(apart)} of {len(set(key))} body pairs left out of the simulation: no "
+                       f"recorded pose brings their geoms within {reach + travel:.3g} m of each other (the closest "
+                       f"{far:.3g} m; " + ", ".join(f"'{self.bodies[a] or a}'-'{self.bodies[b] or b}'" for a, b in apart)
+                       + "), and MJX would collide each pair at every step")
 
     def arrays(self, rec):
         """Recording -> model-order arrays (``trajectory.ModelColumns.arrays``)."""

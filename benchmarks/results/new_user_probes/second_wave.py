@@ -205,6 +205,9 @@ def record(name, text, truth, drive, extras, work):
             i = min(max(k * sub + jit[k], 0), len(qs) - 1)
             row[0] += (i - k * sub) * m.opt.timestep
             row[1:1 + len(logged)] += qs[i][logged] + np.eye(len(logged))[0] * extras.get("offset", 0.0)
+        if "drop" in extras:  # samples a logger lost: (first row, count) left out of the file
+            first, count = extras["drop"]
+            rows = rows[:first] + rows[first + count:]
         paths.append(os.path.join(work, f"{name}_{r}.csv"))
         np.savetxt(paths[-1], np.array(rows), delimiter=",", header="time," + ",".join(cols), comments="")
     return nominal, paths
