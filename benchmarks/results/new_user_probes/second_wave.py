@@ -150,9 +150,13 @@ PROBES = {
 
 def record(name, text, truth, drive, extras, work):
     nominal = os.path.join(work, f"{name}.xml")
+    for fname, content in extras.get("files", {}).items():  # what the model refers to (mesh files)
+        open(os.path.join(work, fname), "w").write(content)
     open(nominal, "w").write(text.format(truth=""))
-    m = mujoco.MjModel.from_xml_string(extras.get("plant") or text.format(truth=truth))
-    mn = mujoco.MjModel.from_xml_string(text.format(truth=""))  # what is logged: the nominal model's joints
+    plant = os.path.join(work, f".{name}_plant.xml")  # (a file: mesh paths are relative to it)
+    open(plant, "w").write(extras.get("plant") or text.format(truth=truth))
+    m = mujoco.MjModel.from_xml_path(plant)
+    mn = mujoco.MjModel.from_xml_path(nominal)  # what is logged: the nominal model's joints
     adr = [m.jnt_qposadr[m.joint(mn.joint(j).name).id] for j in range(mn.njnt)]   # (in the plant's qpos)
     logged = np.concatenate([np.arange(a, a + (4 if mn.jnt_type[j] == 1 else 1)) for j, a in enumerate(adr)])
     if "plant_dt" in extras:
