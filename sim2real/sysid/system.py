@@ -304,34 +304,35 @@ class System:
 
     def bodies_apart(self, recs, reach: float = 0.01) -> tuple[tuple[tuple[int, int], ...], str]:
         """The body-id pairs whose geoms MJX would collide at every step but no pose of ``recs``
-        brings within ``reach`` (m) of each other beyond their margins and the farthest any geom
-        moves in one sample (``System(apart=...)`` leaves their contacts out), and a note saying
-        so. A body pair with one geom pair near, or a declared ``<pair>``, keeps all its contacts."""
+        brings within ``reach`` (m) of each other, beyond their margins and the most their distance
+        changes between two samples (what the motion between samples could close), and a note
+        saying so (``System(apart=...)`` leaves their contacts out). A body pair with one geom
+        pair near, or a declared ``<pair>``, keeps all its contacts."""
         pairs = [(g1, g2) for g1, g2, ip in _contact_pairs(self.mj) if ip < 0]
         if not pairs:
             return (), ""
         m = self.mj
         g1s, g2s = (np.array(x) for x in zip(*pairs))
-        closest = np.full(len(pairs), np.inf)
-        travel = 0.0
+        closest, change = np.full(len(pairs), np.inf), np.zeros(len(pairs))
         for rec in recs:
             prev = None
             for _, d in self._poses(rec):
+                dist = np.array([mujoco.mj_geomDistance(m, d, g1, g2, 1.0, None) for g1, g2 in pairs])
+                closest = np.minimum(closest, dist)
                 if prev is not None:
-                    travel = max(travel, float(np.abs(d.geom_xpos - prev).max()))
-                prev = d.geom_xpos.copy()
-                for i, (g1, g2) in enumerate(pairs):
-                    closest[i] = min(closest[i], mujoco.mj_geomDistance(m, d, g1, g2, 1.0, None))
-        need = m.geom_margin[g1s] + m.geom_margin[g2s] + reach + travel
+                    change = np.maximum(change, np.abs(dist - prev))
+                prev = dist
+        need = m.geom_margin[g1s] + m.geom_margin[g2s] + reach + change
         key = [tuple(sorted((int(m.geom_bodyid[a]), int(m.geom_bodyid[b])))) for a, b in pairs]
         near = {k for k, c, n in zip(key, closest, need) if c <= n}
         apart = tuple(sorted(set(key) - near))
         if not apart:
             return (), ""
-        far = min(c for k, c in zip(key, closest) if k in apart)
+        gap = min(c - n for k, c, n in zip(key, closest, need) if k in apart)
         return apart, (f"contacts of {len(apart)} of {len(set(key))} body pairs left out of the simulation: no "
-                       f"recorded pose brings their geoms within {reach + travel:.3g} m of each other (the closest "
-                       f"{far:.3g} m; " + ", ".join(f"'{self.bodies[a] or a}'-'{self.bodies[b] or b}'" for a, b in apart)
+                       f"recorded pose brings their geoms within {reach:g} m of each other, beyond their margins and "
+                       f"what one sample's motion could close (the least room left {gap:.3g} m; "
+                       + ", ".join(f"'{self.bodies[a] or a}'-'{self.bodies[b] or b}'" for a, b in apart)
                        + "), and MJX would collide each pair at every step")
 
     def arrays(self, rec):
