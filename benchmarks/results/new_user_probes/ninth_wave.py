@@ -98,6 +98,24 @@ for body, geom in [("turret", '<geom type="cylinder" size="0.07 0.05" mass="2.5"
                                   f'      <geom type="mesh" mesh="{body}" contype="0" conaffinity="0" group="2" '
                                   'density="0" rgba="0.7 0.7 0.7 1"/>')
 
+# the arm on torque motors (no servo loop: it swings under gravity), logged at 1 kHz from a 1 ms
+# model; a 0.4 kg tool on the flange the model leaves out
+ARM6_MOTORS = ARM6.replace('timestep="0.002"', 'timestep="0.001"').replace(
+    '<position dampratio="1" ctrlrange="-0.8 0.8"/>', '<motor ctrlrange="-1 1"/>')
+for name, gear in (("base", 8), ("shoulder", 25), ("elbow", 12), ("wrist1", 3), ("wrist2", 1), ("wrist3", 1)):
+    kp = {"base": 150, "shoulder": 300, "elbow": 150, "wrist1": 30, "wrist2": 15, "wrist3": 10}[name]
+    ARM6_MOTORS = ARM6_MOTORS.replace(f'<position name="p_{name}" joint="{name}" kp="{kp}"/>',
+                                      f'<motor name="m_{name}" joint="{name}" gear="{gear}"/>')
+ARM6_TOOL = ARM6_MOTORS.format(truth="").replace(
+    '<geom type="box" pos="0.03 0 0" size="0.03 0.04 0.02" mass="0.5"/>',
+    '<geom type="box" pos="0.03 0 0" size="0.03 0.04 0.02" mass="0.5"/>\n'
+    '                <geom type="sphere" pos="0.1 0 0" size="0.03" mass="0.4"/>')
+
+# ... and as the refusal of the first asks: the turret a capsule (which MJX collides with a box)
+CAPSULE_TURRET = ('<geom type="cylinder" size="0.07 0.05" mass="2.5"/>', '<geom type="capsule" size="0.07 0.05" mass="2.5"/>')
+ARM6_MOTORS_CAPSULE = ARM6_MOTORS.replace(*CAPSULE_TURRET)
+ARM6_TOOL_CAPSULE = ARM6_TOOL.replace(*CAPSULE_TURRET)
+
 # a leg on a test rig: its base on a vertical rail, the foot on the floor (contacts that happen),
 # hip and knee on position servos crouching and pushing within a stance
 HOPPER_RIG = """<mujoco model="hopper_rig">
@@ -133,6 +151,11 @@ PROBES = {
                                       "missing effect)", "multisine", {"period": 0.004, "plant": ARM6_HEAVY_FORE}, 2),
     "arm6_mesh_links_elbow_friction": (ARM6_MESH, 'frictionloss="1.5"', "coulomb_friction@elbow 1.5 N m (the arm "
                                        "written with mesh links)", "multisine", {"period": 0.004, "files": MESHES}, 2),
+    "arm6_motors_1khz_tool": (ARM6_MOTORS, "", "mass_offset@flange: a 0.4 kg tool 0.1 m out (torque motors, 1 kHz "
+                              "log)", "multisine", {"period": 0.001, "plant": ARM6_TOOL}, 2),
+    "arm6_motors_1khz_tool_capsule_turret": (ARM6_MOTORS_CAPSULE, "", "mass_offset@flange: a 0.4 kg tool 0.1 m out "
+                                             "(the turret a capsule)", "multisine",
+                                             {"period": 0.001, "plant": ARM6_TOOL_CAPSULE}, 2),
     "hopper_rig_rail_friction": (HOPPER_RIG, 'frictionloss="3"', "coulomb_friction@rail 3 N (a leg on a rail, its "
                                  "foot on the floor)", "multisine", {}, 2),
     "hopper_rig_delay": (HOPPER_RIG, "", "action_delay 0.015 s (a leg on a rail, its foot on the floor)", "multisine",
