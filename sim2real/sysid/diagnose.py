@@ -811,11 +811,6 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
         bar.close()
 
 
-def _where(rec) -> str:
-    """A recording's file, and its rows where it is a piece of one (``recordings.load_pieces``)."""
-    return f"{rec.path}[rows {rec.rows}]" if rec.rows else rec.path
-
-
 def heldout_walk(step_ho: list[float], nominal_ho: float, per_segment: np.ndarray, joins: list[bool],
                  cfg: DiagnoseConfig) -> int:
     """The held-out check: the index of the last step kept (0: the nominal re-fit alone).
@@ -1320,7 +1315,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
         notes.append(f"fitted.xml was not written: {type(e).__name__}: {e}")
     d = {
         "model": os.path.abspath(cfg.model),
-        "recordings": [_where(r) for r in train], "heldout": [_where(r) for r in held],
+        "recordings": [r.where for r in train], "heldout": [r.where for r in held],
         "sample_period": trajs[0].dt, "physics_step": system.h, "substeps": system.substeps,
         "smoothing_window_samples": [t.window for t in trajs],
         "horizon_samples": sh.H, "step_level": sel.step_level, "segments": {k: int(len(sh.tiles.of(k))) for k in ("fit", "val", "heldout")},

@@ -39,6 +39,7 @@ MAX_STEPS_PER_SAMPLE = 1000
 # it (``_grid``, ``resample``); a step longer than MAX_GAP median steps (samples lost) is refused.
 UNIFORM = 0.01
 MAX_GAP = 3.0
+MIN_SAMPLES = 20  # the fewest a recording (or a piece of one cut at lost samples) may have
 # A measured velocity whose integral over the time column differs from the change of its position
 # by more than this share is refused (``_check_velocity_scale``): deg/s or rpm read as rad/s, a
 # motor's speed before its gear, or stamps spaced by another clock than the samples'.
@@ -71,6 +72,11 @@ class Recording:
     def name(self) -> str:
         base = os.path.splitext(os.path.basename(self.path))[0]
         return f"{base}[rows {self.rows}]" if self.rows else base
+
+    @property
+    def where(self) -> str:
+        """The file, and the rows where this is a piece of it."""
+        return f"{self.path}[rows {self.rows}]" if self.rows else self.path
 
     @property
     def dt(self) -> float:
@@ -241,7 +247,7 @@ def load_pieces(path: str, model: mujoco.MjModel) -> list[Recording]:
     """``load``, with a recording whose logger lost samples (a step over ``MAX_GAP`` median steps:
     a dropped packet, a paused bag) cut there into pieces, each a recording of its own: nothing is
     interpolated over the gap (the motion in it is unknown), and each piece is simulated from its
-    own first state. A piece under 20 samples is left out; ``notes`` says where it was cut."""
+    own first state. A piece under ``MIN_SAMPLES`` is left out; ``notes`` says where it was cut."""
     return _load(path, model, cut=True)
 
 
@@ -284,8 +290,8 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
         if bad.any():
             row = int(np.argmax(bad))
             raise RecordingError(f"{path}: non-finite value {v[row]} in column '{name}' at data row {row + 1}")
-    if n < 20:
-        raise RecordingError(f"{path}: only {n} samples; need at least 20")
+    if n < MIN_SAMPLES:
+        raise RecordingError(f"{path}: only {n} samples; need at least {MIN_SAMPLES}")
     dt = np.diff(t)
     if (dt == 0).any():
         row = int(np.argmax(dt == 0)) + 1
@@ -335,16 +341,16 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
                              f"nanosecond stamps: by 1e9)")
     if len(bounds) == 1:
         return [_on_grid(Recording(path, t, cols), model)]
-    kept = [(a, b) for a, b in bounds if b - a >= 20]
+    kept = [(a, b) for a, b in bounds if b - a >= MIN_SAMPLES]
     if not kept:
         raise RecordingError(f"{path}: samples lost at {len(starts)} places (data rows "
                              f"{', '.join(str(int(r) + 1) for r in starts[:5])}{', ...' if len(starts) > 5 else ''}), "
-                             "leaving no piece of 20 samples or more")
+                             f"leaving no piece of {MIN_SAMPLES} samples or more")
     base = os.path.splitext(os.path.basename(path))[0]
     note = (f"{base}: samples lost at {len(starts)} place{'s' if len(starts) > 1 else ''} (the longest gap "
             f"{dt.max():.4g} s, {dt.max() / med:.0f} steps): cut into {len(kept)} pieces, data rows "
             + ", ".join(f"{a + 1}-{b}" for a, b in kept)
-            + (f" ({sum(b - a for a, b in bounds) - sum(b - a for a, b in kept)} samples in pieces under 20 left out)"
+            + (f" ({n - sum(b - a for a, b in kept)} samples in pieces under {MIN_SAMPLES} left out)"
                if len(kept) < len(bounds) else "") + ", each simulated from its own first state")
     return [_on_grid(Recording(path, t[a:b], {k: v[a:b] for k, v in cols.items()}, [note] if i == 0 else [],
                                rows=f"{a + 1}-{b}"), model) for i, (a, b) in enumerate(kept)]

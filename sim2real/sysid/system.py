@@ -85,6 +85,11 @@ def _geom_label(m: mujoco.MjModel, g: int) -> str:
     return f"{shape} '{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f'#{g}'}' of {body}"
 
 
+def _body_pair(m: mujoco.MjModel, g1: int, g2: int) -> tuple[int, int]:
+    """The ids of the bodies of geoms ``g1`` and ``g2``, in order (an exclusion's key)."""
+    return tuple(sorted((int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2]))))
+
+
 def _contact_pairs(m: mujoco.MjModel) -> list[tuple[int, int, int]]:
     """The geom pairs MJX collides at every physics step, whether or not they touch: ``(geom1,
     geom2, declared pair id or -1)`` (MJX's own filter: the pairs ``mjx.put_model`` checks)."""
@@ -112,7 +117,7 @@ def _leave_out_contacts(m: mujoco.MjModel, xml_path: str, notes: list[str], apar
         if ip >= 0:
             raise ModelError(f"{xml_path}: the contact pair of {_geom_label(m, g1)} and {_geom_label(m, g2)} is declared, "
                              "but MJX cannot collide these shapes; give one of them a sphere, capsule or box")
-    unsupported = {tuple(sorted((int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2])))) for g1, g2, _ in bad}
+    unsupported = {_body_pair(m, g1, g2) for g1, g2, _ in bad}
     bodies = sorted(unsupported | {tuple(sorted(p)) for p in apart})
     if not bodies:
         return m, []
@@ -133,8 +138,7 @@ def _leave_out_contacts(m: mujoco.MjModel, xml_path: str, notes: list[str], apar
                      + ": contacts between " + ", ".join(f"'{m2.body(b1).name}' and '{m2.body(b2).name}'"
                                                          for b1, b2 in sorted(unsupported))
                      + " are left out of the simulation (every recorded pose checked: their geoms never touch)")
-    left_out = [(g1, g2) for g1, g2, _ in pairs if tuple(sorted((int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2]))))
-                in unsupported]
+    left_out = [(g1, g2) for g1, g2, _ in pairs if _body_pair(m, g1, g2) in unsupported]
     return m2, left_out
 
 
@@ -290,8 +294,8 @@ class System:
                 reach = float(m.geom_margin[g1] + m.geom_margin[g2])
                 if (dist := mujoco.mj_geomDistance(m, d, g1, g2, reach + 0.01, None)) <= reach:
                     raise ModelError(
-                        f"{rec.path}: at data row {k + 1} (t = {rec.time[k]:.4g} s) {_geom_label(m, g1)} touches "
-                        f"{_geom_label(m, g2)} (distance {dist:.3g} m), and MJX cannot collide these shapes; give "
+                        f"{rec.path}: at data row {k + 1} (t = {rec.time[k]:.4g} s) {_geom_label(m, g1)} "
+                        f"touches {_geom_label(m, g2)} (distance {dist:.3g} m), and MJX cannot collide these shapes; give "
                         "one of them a sphere, capsule or box in the model")
 
     def _poses(self, rec):
@@ -323,7 +327,7 @@ class System:
                     change = np.maximum(change, np.abs(dist - prev))
                 prev = dist
         need = m.geom_margin[g1s] + m.geom_margin[g2s] + reach + change
-        key = [tuple(sorted((int(m.geom_bodyid[a]), int(m.geom_bodyid[b])))) for a, b in pairs]
+        key = [_body_pair(m, a, b) for a, b in pairs]
         near = {k for k, c, n in zip(key, closest, need) if c <= n}
         apart = tuple(sorted(set(key) - near))
         if not apart:

@@ -16,6 +16,7 @@ on, the third held out).
 ``PYTHONPATH=. python benchmarks/results/new_user_probes/ninth_wave.py [WORK] [PROBE ...]``.
 """
 import os
+import re
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -102,10 +103,9 @@ for body, geom in [("turret", '<geom type="cylinder" size="0.07 0.05" mass="2.5"
 # model; a 0.4 kg tool on the flange the model leaves out
 ARM6_MOTORS = ARM6.replace('timestep="0.002"', 'timestep="0.001"').replace(
     '<position dampratio="1" ctrlrange="-0.8 0.8"/>', '<motor ctrlrange="-1 1"/>')
-for name, gear in (("base", 8), ("shoulder", 25), ("elbow", 12), ("wrist1", 3), ("wrist2", 1), ("wrist3", 1)):
-    kp = {"base": 150, "shoulder": 300, "elbow": 150, "wrist1": 30, "wrist2": 15, "wrist3": 10}[name]
-    ARM6_MOTORS = ARM6_MOTORS.replace(f'<position name="p_{name}" joint="{name}" kp="{kp}"/>',
-                                      f'<motor name="m_{name}" joint="{name}" gear="{gear}"/>')
+GEARS = {"base": 8, "shoulder": 25, "elbow": 12, "wrist1": 3, "wrist2": 1, "wrist3": 1}
+ARM6_MOTORS = re.sub(r'<position name="p_(\w+)" joint="\1" kp="\d+"/>',
+                     lambda x: f'<motor name="m_{x[1]}" joint="{x[1]}" gear="{GEARS[x[1]]}"/>', ARM6_MOTORS)
 ARM6_TOOL = ARM6_MOTORS.format(truth="").replace(
     '<geom type="box" pos="0.03 0 0" size="0.03 0.04 0.02" mass="0.5"/>',
     '<geom type="box" pos="0.03 0 0" size="0.03 0.04 0.02" mass="0.5"/>\n'
