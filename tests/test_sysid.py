@@ -471,6 +471,11 @@ def test_contacts_mjx_cannot_compute_are_left_out_where_no_recorded_pose_touches
         system.check_recording_covers(load(str(tmp_path / "r.csv"), system.mj))
     row = int(e.value.args[0].split("at data row ")[1].split()[0])
     assert abs(row - (touch + 1)) <= 1   # (flat end, round model)
+    # the same swing after 20 samples at rest and 5 lost: the row named is the file's, not the piece's
+    t = np.concatenate([0.01 * np.arange(20), 0.01 * np.arange(25, 125)])
+    save_csv(str(tmp_path / "r.csv"), t, {"qpos:hinge": np.r_[np.zeros(20), angle], "ctrl:m": 0 * t})
+    with pytest.raises(ModelError, match=rf"r.csv: at data row {row + 20} "):
+        system.check_recording_covers(load_all([str(tmp_path / "r.csv")], system.mj)[1])
     save_csv(str(tmp_path / "r.csv"), 0.01 * np.arange(100), {"qpos:hinge": angle / 2, "ctrl:m": 0 * angle})
     system.check_recording_covers(load(str(tmp_path / "r.csv"), system.mj))   # (never nearer than 3 cm)
     open(path, "w").write(xml.format(pair='<contact><pair geom1="link" geom2="stop"/></contact>'))

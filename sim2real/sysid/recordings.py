@@ -79,6 +79,11 @@ class Recording:
         return f"{self.path}[rows {self.rows}]" if self.rows else self.path
 
     @property
+    def first_row(self) -> int:
+        """The file's data row (from 1) of this recording's first sample."""
+        return int(self.rows.split("-")[0]) if self.rows else 1
+
+    @property
     def dt(self) -> float:
         return float(np.median(np.diff(self.time)))
 

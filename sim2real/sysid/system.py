@@ -294,7 +294,7 @@ class System:
                 reach = float(m.geom_margin[g1] + m.geom_margin[g2])
                 if (dist := mujoco.mj_geomDistance(m, d, g1, g2, reach + 0.01, None)) <= reach:
                     raise ModelError(
-                        f"{rec.path}: at data row {k + 1} (t = {rec.time[k]:.4g} s) {_geom_label(m, g1)} "
+                        f"{rec.path}: at data row {rec.first_row + k} (t = {rec.time[k]:.4g} s) {_geom_label(m, g1)} "
                         f"touches {_geom_label(m, g2)} (distance {dist:.3g} m), and MJX cannot collide these shapes; give "
                         "one of them a sphere, capsule or box in the model")
 
