@@ -713,10 +713,11 @@ def test_fitted_friction_is_as_hard_in_mujoco_as_the_fitted_law(tmp_path):
     assert err_hard < 0.5 * err_soft
 
 
-def _short_native_recordings(tmp_path, n, count=3):
+def _short_native_recordings(tmp_path, n, count=3, frictionloss=0.0):
     """``count`` recordings of ``n`` samples of the pendulum stepped by native MuJoCo (a policy that
-    falls at once gives such logs)."""
+    falls at once gives such logs); ``frictionloss`` (N m) on its hinge, which the model lacks."""
     m = _model()
+    m.dof_frictionloss[0] = frictionloss
     paths = []
     for k in range(count):
         d = mujoco.MjData(m)
@@ -740,12 +741,35 @@ def test_short_recordings_shorten_the_chosen_horizon_not_a_set_one(tmp_path):
     d = diagnose(DiagnoseConfig(model=PENDULUM, recordings=tuple(paths[:2]), heldout=(paths[2],),
                                 out=str(tmp_path / "d"), plots=False, progress=False, effects=("none",)))
     assert d["answer"] == "none"
+    assert not d["fit"]["left"]["unexplained"]  # (the model is the plant: nothing left but noise)
     assert any(n.startswith("prediction horizon shortened to") for n in d["notes"]), d["notes"]
     assert d["horizon_samples"] >= 5 and d["segments"]["val"] >= 2
     with pytest.raises(RecordingError, match="too short for 20-sample predictions"):
         diagnose(DiagnoseConfig(model=PENDULUM, recordings=tuple(paths[:2]), out=str(tmp_path / "e"),
                                 plots=False, progress=False, effects=("none",), horizon_seconds=0.2))
     assert not os.path.exists(tmp_path / "e")
+
+
+def test_after_none_the_report_says_motion_is_left_unexplained(tmp_path, capsys):
+    """A pendulum with a 0.8 N m friction its model lacks, diagnosed with no effect to search: the
+    answer is `none`, and the command line and report say the motion is left unexplained -- the
+    re-fitted model misfits the held-out log by far more than its noise and physics step leave --
+    naming the hinge. (The model that is its plant leaves nothing: the short-recordings test.)"""
+    from sim2real.commands.diagnose import main
+
+    paths = _short_native_recordings(tmp_path, 300, count=2, frictionloss=0.8)
+    out = tmp_path / "d"
+    main([f"model={PENDULUM}", f"recordings=[{paths[0]}]", f"heldout=[{paths[1]}]", f"out={out}", "plots=false",
+          "progress=false", "effects=[none]"])
+    d = json.loads((out / "diagnosis.json").read_text())
+    left = d["fit"]["left"]
+    assert d["answer"] == "none" and left["unexplained"] and left["ratio"] > left["limit"]
+    # the ratio is the misfit per residual over the floor, the mean of each signal's own
+    assert left["ratio"] == pytest.approx(left["level"] / left["floor"])
+    assert left["per_signal"] == {"qpos:hinge": pytest.approx(left["ratio"])}  # (the one signal)
+    printed = capsys.readouterr().out
+    assert "Motion is left unexplained" in printed and "most on qpos:hinge" in printed
+    assert "**Motion is left unexplained**" in (out / "report.md").read_text()
 
 
 def test_targets_restrict_the_search_and_unknown_ones_are_refused(tmp_path):

@@ -15,7 +15,7 @@ from sim2real.common.cli import main_guard
 
 def main(argv):
     from sim2real.common import config as config_lib
-    from sim2real.sysid import emps
+    from sim2real.sysid import emps, report
     from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
 
     cfg = config_lib.load(DiagnoseConfig, argv)
@@ -39,6 +39,8 @@ def main(argv):
         print(f"  note: {note}")
     f = d["fit"]
     print(f"held-out NRMSE ({f['metric']}): {f['before']:.4g} -> {f['after']:.4g} ({f['change']})")
+    if f.get("left"):
+        print(report.left_text(d).replace("**", ""))
     if demo:
         sel = next((s for s in d["selected"] if s["effect"] == "coulomb_friction"), None)
         if sel is not None:

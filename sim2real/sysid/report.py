@@ -325,6 +325,26 @@ def figures(d, system, sh, tiles, pred_b, pred_a, trajs, n_train, out, invdyn_ro
     return images
 
 
+def left_text(d: dict) -> str:
+    """One sentence on what the kept model leaves unexplained on the check data (``fit.left``,
+    ``diagnose.left_over``), for the report and the command line. ``**bold**`` marks the verdict."""
+    left = d["fit"].get("left")
+    if not left:
+        return ""
+    r, worst = left["ratio"], max(left["per_signal"].items(), key=lambda kv: kv[1], default=None)
+    size = (f"{r:.3g}x what the sensor noise and the physics step alone leave ({left['level']:.3g} against "
+            f"{left['floor']:.3g} per residual)")
+    if left["unexplained"]:
+        return (f"**Motion is left unexplained**: on the check data the model misfits by {size}"
+                + (f", most on {worst[0]} ({worst[1]:.3g}x)" if worst else "")
+                + f"; models that hold every physics of their plant nearly always stay under {left['limit']:g}x. Physics "
+                  "outside the candidates searched, an effect on several joints at once, or a parameter "
+                  "the fit could not reach.")
+    return (f"What is left on the check data is {size}: under the {left['limit']:g}x that models holding every "
+            "physics of their plant nearly always stay under, so no large motion is left unexplained (a smaller "
+            "effect may still hide below what these recordings tell apart).")
+
+
 def _fmt(v):
     return "" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.4g}"
 
@@ -350,6 +370,8 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
                        "as well as any candidate."))
     else:
         B.append(("p", "**Inconclusive**: effects improved the training recordings but not the held-out ones (notes)."))
+    if fit.get("left"):
+        B.append(("p", left_text(d)))
 
     def ci(v, sd):  # a 95% interval from the fit's standard deviation, where it has one
         return "" if sd is None or not np.isfinite(sd) else f"[{v - 1.96 * sd:.4g}, {v + 1.96 * sd:.4g}]"
