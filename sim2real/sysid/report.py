@@ -340,9 +340,9 @@ def left_text(d: dict) -> str:
                 + f"; models that hold every physics of their plant nearly always stay under {left['limit']:g}x. Physics "
                   "outside the candidates searched, an effect on several joints at once, or a parameter "
                   "the fit could not reach.")
-    return (f"What is left on the check data is {size}: under the {left['limit']:g}x that models holding every "
-            "physics of their plant nearly always stay under, so no large motion is left unexplained (a smaller "
-            "effect may still hide below what these recordings tell apart).")
+    return (f"What is left on the check data is {size}, under {left['limit']:g}x, where models that hold every "
+            "physics of their plant nearly always stay: no large motion is left unexplained (a smaller effect may "
+            "still hide below what these recordings tell apart).")
 
 
 def _fmt(v):
