@@ -250,6 +250,7 @@ def test_driver_interrupted_and_resumed_equals_uninterrupted(tmp_path):
         config_from_args([f"out_dir={tmp_path}", "name=hw", "resume=true", "algo_options.num_samples=8"])
 
 
+@pytest.mark.slow  # 40-67 s on 2 cores; moved 2026-12-06 when the suite took 969 s (SimOpt's own tests stay)
 def test_simopt_runs_through_the_training_script(tmp_path, capsys):
     """``python scripts/train.py config=configs/simopt_pendulum.yaml``: SimOpt is an outer loop of the
     one driver; its run folder is read back like any other (``load_policy``)."""
