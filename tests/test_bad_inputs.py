@@ -164,10 +164,10 @@ CASES = [
                   '</worldbody></mujoco>'},
      "column 'qpos:hinge': joint 'hinge' has several coordinates (a ball or free joint); its qpos columns are "
      "qpos:hinge:qw, qpos:hinge:qx, qpos:hinge:qy, qpos:hinge:qz"),
-    ("model_site_transmission", "diagnose", ["model=site.xml", "recordings=[a.csv]"],
-     {"site.xml": '<mujoco><worldbody><body><joint name="hinge"/><geom size=".1"/><site name="s"/></body>'
-                  '</worldbody><actuator><motor name="thrust" site="s" gear="0 0 1 0 0 0"/></actuator></mujoco>'},
-     "actuator 'thrust' has a site transmission; the diagnosis handles actuators on joints and tendons only"),
+    ("model_body_transmission", "diagnose", ["model=body.xml", "recordings=[a.csv]"],
+     {"body.xml": '<mujoco><worldbody><body name="b"><joint name="hinge"/><geom size=".1"/></body></worldbody>'
+                  '<actuator><adhesion name="grip" body="b" ctrlrange="0 1" gain="1"/></actuator></mujoco>'},
+     "actuator 'grip' has a body transmission; the diagnosis handles actuators on joints, tendons and sites only"),
     ("model_other_joints", "diagnose", [f"model={os.path.join(ASSETS, 'arm2.xml')}", "recordings=[a.csv]"], {},
      "names joint 'hinge'"),
     ("model_required", "diagnose", ["recordings=[a.csv]"], {}, "model=PATH.xml is required"),

@@ -1444,16 +1444,18 @@ _TENDON_ARM = """<mujoco><option timestep="0.002"/><worldbody>
 <body name="upper"><joint name="shoulder" axis="0 1 0" damping="0.05"/>
 <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/>
 <body name="lower" pos="0 0 -0.3"><joint name="elbow" axis="0 1 0" damping="0.05"/>
-<geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.3"/></body></body></worldbody>
-<tendon><fixed name="cable"><joint joint="shoulder" coef="1"/><joint joint="elbow" coef="0.5"/></fixed></tendon>
-<actuator>ACTUATOR<motor name="elbow_motor" joint="elbow"/></actuator></mujoco>"""
+<geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.3"/><site name="tip" pos="0 0 -0.3"/></body></body>
+</worldbody><tendon><fixed name="cable"><joint joint="shoulder" coef="1"/><joint joint="elbow" coef="0.5"/></fixed></tendon>
+<actuator>ACTUATOR<motor name="tip_thruster" site="tip" gear="1 0 0 0 0 0"/></actuator></mujoco>"""
 
 
 def test_a_tendon_driven_arm_is_diagnosed(tmp_path):
     """An actuator that pulls a tendon (a cable coupling both joints) is diagnosed like one on a
     joint: the truth (native MuJoCo) passes that actuator's command through MuJoCo's own 40 ms
     filter, logged at 250 Hz from 2 ms physics, the clock starting at 3.7 s, no qvel; a lag is
-    named on it. A backlash is not searched there (no joint of its own), and the report says so."""
+    named on it. The other actuator is a thruster at the lower link's tip, written as MuJoCo writes
+    propellers (a motor on a site, thrust along the site's x axis): its force is in N, and nothing
+    is named on it. A backlash is searched on neither (no joint of its own); the report says so."""
     nominal = _TENDON_ARM.replace("ACTUATOR", '<motor name="cable_motor" tendon="cable"/>')
     truth = mujoco.MjModel.from_xml_string(_TENDON_ARM.replace(
         "ACTUATOR", '<general name="cable_motor" tendon="cable" dyntype="filterexact" dynprm="0.04"/>'))
@@ -1469,15 +1471,21 @@ def test_a_tendon_driven_arm_is_diagnosed(tmp_path):
                 mujoco.mj_step(truth, d)
         paths.append(str(tmp_path / f"run{i}.csv"))
         np.savetxt(paths[-1], rows, delimiter=",", comments="",
-                   header="time,qpos:shoulder,qpos:elbow,ctrl:cable_motor,ctrl:elbow_motor")
+                   header="time,qpos:shoulder,qpos:elbow,ctrl:cable_motor,ctrl:tip_thruster")
     d = diagnose(DiagnoseConfig(model=str(tmp_path / "arm.xml"), recordings=tuple(paths[:2]), heldout=(paths[2],),
                                 out=str(tmp_path / "diag"), plots=False, progress=False))
     assert _named(d) == [("motor_lag", "cable_motor")]
     assert d["selected"][0]["params"]["motor_lag:cable_motor"] == pytest.approx(0.04, rel=0.25)
     assert "backlash not searched on cable_motor: it pulls a tendon, not a joint of its own" in d["notes"]
+    assert "backlash not searched on tip_thruster: it pushes at a site, not a joint of its own" in d["notes"]
     assert d["fit"]["after"] < 0.5 * d["fit"]["before"]
     fitted = mujoco.MjModel.from_xml_path(str(tmp_path / "diag" / "fitted.xml"))  # the lag as MuJoCo's filter
     assert fitted.actuator_dyntype[0] == mujoco.mjtDyn.mjDYN_FILTEREXACT
+    assert fitted.actuator_trntype[1] == mujoco.mjtTrn.mjTRN_SITE
+    from sim2real.sysid.system import System
+    spec = System(str(tmp_path / "arm.xml")).spec
+    assert (spec["saturation:tip_thruster"].unit, spec["saturation:cable_motor"].unit) == ("N", "Nm")
+
 
 
 def test_a_lag_shared_by_every_motor_is_named_as_one_when_asked(tmp_path):

@@ -47,7 +47,10 @@ _INTEGRATOR = {int(mujoco.mjtIntegrator.mjINT_EULER): "Euler", int(mujoco.mjtInt
                int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST): "implicitfast"}
 
 
-_TRANSMISSIONS = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT), int(mujoco.mjtTrn.mjTRN_TENDON))
+# (a site's: a thruster, a propeller, a Cartesian servo with a reference site; MJX computes its moment
+# arms as MuJoCo does, so the command path acts on it as on a tendon's: ``kinds.base.actuator_joint``)
+_TRANSMISSIONS = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT), int(mujoco.mjtTrn.mjTRN_TENDON),
+                  int(mujoco.mjtTrn.mjTRN_SITE))
 
 
 def check_model(m: mujoco.MjModel, xml_path: str) -> None:
@@ -63,7 +66,7 @@ def check_model(m: mujoco.MjModel, xml_path: str) -> None:
         if int(m.actuator_trntype[a]) not in _TRANSMISSIONS:
             kind = mujoco.mjtTrn(m.actuator_trntype[a]).name.removeprefix("mjTRN_").lower()
             raise ModelError(f"{xml_path}: actuator '{an}' has a {kind} transmission; the diagnosis handles "
-                             "actuators on joints and tendons only")
+                             "actuators on joints, tendons and sites only")
         if int(m.actuator_dyntype[a]) in (int(mujoco.mjtDyn.mjDYN_MUSCLE), int(mujoco.mjtDyn.mjDYN_USER)):
             raise ModelError(f"{xml_path}: actuator '{an}': muscle/user dynamics are not supported")
 

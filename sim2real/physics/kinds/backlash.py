@@ -74,10 +74,10 @@ class Backlash(Kind):
     skip_when_off = True   # its sums are nine tenths of a replay of the command path
 
     def declared(self, m, index, kind, entry):
-        # on a tendon (no joint of its own) the band is not defined: only 0 is allowed
+        # on a tendon or a site (no joint of its own) the band is not defined: only 0 is allowed
         if kind == "backlash" and actuator_joint(m, index) < 0:
             d, lo, hi, unit, doc = entry
-            return d, lo, d, unit, doc + " (0 on a tendon's actuator, which has no joint of its own)"
+            return d, lo, d, unit, doc + " (0 on a tendon's or a site's actuator, which has no joint of its own)"
         return entry
 
     def setup(self, pm) -> None:
@@ -233,8 +233,9 @@ class Backlash(Kind):
         m = system.mj
         an = system.actuators[target]
         j = actuator_joint(m, target)
-        if system.spec[f"backlash:{an}"].high <= 0:  # (``declared``: a tendon)
-            note = f"backlash not searched on {an}: it pulls a tendon, not a joint of its own"
+        if system.spec[f"backlash:{an}"].high <= 0:  # (``declared``: a tendon or a site)
+            how = "pushes at a site" if int(m.actuator_trntype[target]) == int(mujoco.mjtTrn.mjTRN_SITE) else "pulls a tendon"
+            note = f"backlash not searched on {an}: it {how}, not a joint of its own"
             if note not in system.notes:
                 system.notes.append(note)
             return

@@ -193,15 +193,17 @@ _DIRECT = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT
 
 def actuator_joint(m: mujoco.MjModel, a: int) -> int:
     """The joint actuator ``a`` drives directly (a joint transmission), or -1 where it pulls a
-    tendon: its force then reaches the joints through the tendon's moment arms, which MuJoCo
-    computes, so the command path's delay, lag and saturation act on it as on a joint's, while
-    a dead band between a motor and *its* joint is not defined."""
+    tendon or pushes at a site (a thruster): its force then reaches the joints through moment
+    arms that MuJoCo computes, so the command path's delay, lag and saturation act on it as on a
+    joint's, while a dead band between a motor and *its* joint is not defined."""
     return int(m.actuator_trnid[a, 0]) if int(m.actuator_trntype[a]) in _DIRECT else -1
 
 
 def actuator_is_linear(m: mujoco.MjModel, a: int) -> bool:
-    """Its force is in N (a slide joint, a spatial tendon's length in m), not N m (a hinge, a
-    fixed tendon whose first joint is a hinge)."""
+    """Its force is in N (a slide joint, a spatial tendon's length in m, a site's force), not N m
+    (a hinge, a fixed tendon whose first joint is a hinge, a site's gear with a torque only)."""
+    if int(m.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_SITE):
+        return bool(np.any(m.actuator_gear[a, :3] != 0))
     j = actuator_joint(m, a)
     if j < 0 and int(m.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_TENDON):
         adr = int(m.tendon_adr[m.actuator_trnid[a, 0]])
