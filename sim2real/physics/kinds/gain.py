@@ -3,6 +3,7 @@ servo's velocity gain (``kv``), as scalings of the actuator's declared gain/bias
 from __future__ import annotations
 
 import mujoco
+import numpy as np
 
 from sim2real.physics.kinds.base import Kind, name_of
 from sim2real.physics.params import Param
@@ -15,9 +16,22 @@ def is_servo(m: mujoco.MjModel, a: int) -> bool:
             and m.actuator_biasprm[a, 1] != 0)
 
 
+def gear_size(m: mujoco.MjModel, a: int) -> float:
+    """Actuator ``a``'s gear as one number: its first entry where MuJoCo reads no other (a hinge, a
+    slide, a tendon), the whole vector's length where it is a direction (a site's wrench, a ball or
+    free joint's axis). Why: a thruster's gear is "0 0 1 0 0 0.02" (thrust along the site's z,
+    with its drag torque); its first entry, 0, made the gain's default 0, and the gain law,
+    scaled by value / default, was scaled by 0 instead of 1: the drone flew without thrust."""
+    g = np.asarray(m.actuator_gear[a], float)
+    multi = int(m.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_SITE) or (
+        int(m.actuator_trntype[a]) in (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
+        and int(m.jnt_type[m.actuator_trnid[a, 0]]) in (int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_BALL)))
+    return float(np.linalg.norm(g)) if multi else float(g[0])
+
+
 def nominal_gain(m: mujoco.MjModel, a: int) -> float:
     """Actuator ``a``'s declared force per unit command: gear x gain (Kp for a position servo)."""
-    return float(m.actuator_gear[a, 0] * m.actuator_gainprm[a, 0])
+    return gear_size(m, a) * float(m.actuator_gainprm[a, 0])
 
 
 def declare(m: mujoco.MjModel, actuators) -> list[Param]:
@@ -29,7 +43,7 @@ def declare(m: mujoco.MjModel, actuators) -> list[Param]:
         ps.append(Param(f"gain:{an}", round(g, 6), 0.0, 100.0 * abs(g) + 1.0, "N|Nm per unit",
                         "actuator gain (gear x gain; Kp for position servos)", "actuator_gain", a))
         if is_servo(m, a) and m.actuator_biasprm[a, 2] != 0:
-            kv = float(-m.actuator_biasprm[a, 2] * m.actuator_gear[a, 0])
+            kv = float(-m.actuator_biasprm[a, 2]) * gear_size(m, a)
             ps.append(Param(f"kv:{an}", round(kv, 6), 0.0, 100.0 * kv + 1.0, "N s/m|Nm s/rad",
                             "servo velocity gain", "actuator_kv", a))
     return ps
