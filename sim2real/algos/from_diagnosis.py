@@ -41,7 +41,7 @@ from sim2real.sysid.select import FAR_MASS, is_far_mass
 
 # fitted alongside an effect but with no counterpart in the envs' physics (a payload's distance
 # along the link, the motor inertia crossing a backlash): an error when a selected effect has them
-_HELPERS = ("payload_r", "backlash_inertia")
+_HELPERS = ("payload_r", "payload_x", "payload_y", "payload_z", "backlash_inertia")
 
 
 def load(path: str) -> dict:

@@ -1,5 +1,7 @@
-"""A payload: a point mass on a body, at a ``payload_<body>`` site, its centre of mass, or a fitted
-distance along the link (``payload_r``); the diagnosis' ``mass_offset``."""
+"""A payload: a point mass on a body, at a ``payload_<body>`` site, its centre of mass, a fitted
+distance along the link (``payload_r``, a hinged body), or a fitted place in the body's frame
+(``payload_x/y/z``, a body that flies or turns about a point: a camera under a drone); the
+diagnosis' ``mass_offset``."""
 from __future__ import annotations
 
 import jax.numpy as jnp
@@ -28,14 +30,32 @@ def link_axis(m: mujoco.MjModel, b: int) -> tuple[np.ndarray, np.ndarray, float]
     return anchor, r / length, length
 
 
+_AXES = ("payload_x", "payload_y", "payload_z")
+_TURNS = (int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_BALL))
+
+
+def body_reach(m: mujoco.MjModel, b: int) -> float:
+    """How far body ``b``'s geoms reach from its centre of mass (m): its size."""
+    gs = [g for g in range(m.ngeom) if m.geom_bodyid[g] == b]
+    return max([float(np.linalg.norm(m.geom_pos[g] - m.body_ipos[b]) + m.geom_rbound[g]) for g in gs] + [1e-3])
+
+
 def position_params(m: mujoco.MjModel, bodies) -> list[Param]:
     """``payload_r:<body>``: distance of a payload from the joint axis along the link (through the
     centre of mass), for hinged bodies; the payload sits at the link's far end (twice the centre
-    of mass distance, the tip of a uniform link) by default."""
+    of mass distance, the tip of a uniform link) by default. ``payload_x/y/z:<body>``: its place
+    in the body's frame relative to the centre of mass, for a body on a free or ball joint (a
+    drone, a floating base, a spherical pendulum), within twice the body's reach either way;
+    at the centre of mass by default."""
     ps = []
     for b in bodies:
         ax = link_axis(m, b)
         if ax is None:
+            if m.body_jntnum[b] == 1 and int(m.jnt_type[m.body_jntadr[b]]) in _TURNS:
+                reach = round(2 * body_reach(m, b), 6)
+                name = name_of(m, mujoco.mjtObj.mjOBJ_BODY, b)
+                ps += [Param(f"{k}:{name}", 0.0, -reach, reach, "m", f"the payload's {k[-1]} from the centre of mass "
+                             "(body frame)", k, b) for k in _AXES]
             continue
         length = ax[2]
         ps.append(Param(f"payload_r:{name_of(m, mujoco.mjtObj.mjOBJ_BODY, b)}", round(2 * length, 6), 0.0,
@@ -45,7 +65,7 @@ def position_params(m: mujoco.MjModel, bodies) -> list[Param]:
 
 
 class Payload(Kind):
-    owns = ("payload", "payload_r")
+    owns = ("payload", "payload_r") + _AXES
     attach = BODY
     declares = {"payload": (0.0, 0.0, 1e3, "kg", "point mass at the body's payload_<body> site (else its centre of mass)")}
     order = 30
@@ -67,16 +87,24 @@ class Payload(Kind):
         for _, p in pm.spec.of_kind("payload_r"):
             anchor, direction, _ = link_axis(m, p.index)
             pm.payload_axis[p.index] = (np.asarray(anchor, np.float32), np.asarray(direction, np.float32))
+        # a payload_x/y/z triple moves it in the body's frame from where it would sit
+        pm.payload_offset = {}
+        for k, axis in enumerate(_AXES):
+            for i, p in pm.spec.of_kind(axis):
+                pm.payload_offset.setdefault(p.index, [0, 0, 0])[k] = i
 
     def apply(self, pm, z, get, f) -> None:
         where = {p.index: z[i] for i, p in pm.spec.of_kind("payload_r")}
         for i, p in pm.spec.of_kind("payload"):
-            f.update(self._add(pm, get, p.index, z[i], where.get(p.index)))
+            shift = pm.payload_offset.get(p.index)
+            f.update(self._add(pm, get, p.index, z[i], where.get(p.index),
+                               None if shift is None else z[jnp.asarray(shift)]))
 
     @staticmethod
-    def _add(pm, get, b: int, mp, r=None):
+    def _add(pm, get, b: int, mp, r=None, shift=None):
         """Point mass ``mp`` at distance ``r`` along the link (``payload_r``), else at the body's
-        ``payload_<body>`` site (its centre of mass if none).
+        ``payload_<body>`` site (its centre of mass if none), moved by ``shift`` ``[3]`` (m, body
+        frame; ``payload_x/y/z``).
 
         Mass, centre of mass and inertia follow (parallel-axis theorem); the result is kept
         diagonal in the body's principal frame, exact for a payload on a principal axis through
@@ -88,6 +116,8 @@ class Payload(Kind):
             p = jnp.asarray(anchor) + r * jnp.asarray(direction)
         else:
             p = jnp.asarray(pm.payload_pos.get(b, c))
+        if shift is not None:
+            p = p + shift
         rot = massprops.quat_to_mat(get("body_iquat")[b])
         i_body = rot @ jnp.diag(get("body_inertia")[b]) @ rot.T
         c_new = (m * c + mp * p) / (m + mp)
@@ -110,18 +140,29 @@ class Payload(Kind):
             pos = np.asarray(anchor) + ctx.values[f"payload_r:{bname}"] * np.asarray(direction)
         else:
             pos = system.physics.payload_pos.get(p.index, system.mj.body_ipos[p.index])
+        if p.index in system.physics.payload_offset:
+            pos = np.asarray(pos) + np.array([ctx.values[f"{k}:{bname}"] for k in _AXES])
         child = ctx.spec.body(bname).add_body(name=f"payload_mass_{bname}", pos=list(map(float, pos)))
         child.mass = v
         child.inertia = [1e-6 * v] * 3
         child.explicitinertial = True
 
     def candidates(self, system, sc, add, target) -> None:
-        # a payload anywhere along a hinged link (bodies without a payload_r are only a mass change)
-        r_name = f"payload_r:{system.bodies[target]}"
-        if r_name not in system.spec:
-            return
+        # a payload anywhere along a hinged link, or anywhere on a body that flies or turns about
+        # a point (other bodies' payloads are only a mass change)
         bn = system.bodies[target]
         mb = float(system.mj.body_mass[target])
+        r_name = f"payload_r:{bn}"
+        at = [f"{k}:{bn}" for k in _AXES]
+        if at[0] in system.spec:
+            # screened at its centre of mass and half its reach along each axis either way
+            reach = system.spec[at[0]].high
+            places = [np.zeros(3)] + [s * 0.25 * reach * e for e in np.eye(3) for s in (1, -1)]
+            add("mass_offset", bn, [f"payload:{bn}", *at], [(f * mb, *x) for f in (0.15, 0.4) for x in places],
+                [0.3 * mb] + [0.25 * reach] * 3, [(0.0, 5.0 * mb)] + [(-reach, reach)] * 3)
+            return
+        if r_name not in system.spec:
+            return
         p = system.spec[r_name]
         L = p.default  # the link's far end
         add("mass_offset", bn, [f"payload:{bn}", r_name],
