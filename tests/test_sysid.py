@@ -1032,3 +1032,55 @@ def test_a_recording_that_lost_samples_is_cut_into_pieces(tmp_path):
     np.testing.assert_allclose(pieces[1].get("qpos", "hinge"), np.sin(pieces[1].time), atol=1e-3)  # (edges held)
     assert "cut into 2 pieces, data rows 1-150, 151-386 (10 samples in pieces under 20 left out)" in pieces[0].notes[0]
     assert "resampled onto it" in pieces[1].notes[-1]
+
+
+_DRONE = """<mujoco><worldbody><body name="quad" pos="0 0 1"><freejoint name="root"/>
+<geom type="box" size="0.06 0.06 0.02" mass="0.6"/>
+<geom type="capsule" fromto="-0.12 -0.12 0 0.12 0.12 0" size="0.01" mass="0.1"/>
+<geom type="capsule" fromto="-0.12 0.12 0 0.12 -0.12 0" size="0.01" mass="0.1"/>
+<site name="r1" pos="0.12 0.12 0.01"/><site name="r2" pos="-0.12 -0.12 0.01"/>CAMERA</body></worldbody>
+<actuator><motor name="m1" site="r1" gear="0 0 1 0 0 0.02"/><motor name="m2" site="r2" gear="0 0 1 0 0 0.02"/></actuator>
+</mujoco>"""
+
+
+def test_a_payload_on_a_flying_body_sits_where_its_three_coordinates_put_it(tmp_path):
+    """A body on a free joint (a drone) has no link to put a payload along: its ``mass_offset``
+    has a place in the body's frame (``payload_x/y/z``), searched within twice the body's reach.
+    The physics it gives (mass, centre of mass, the inertia on the body's principal axes) is
+    MuJoCo's own for a small sphere there; the thrusters' gains, sized by their gear's length
+    (the first entry of "0 0 1 0 0 0.02" is 0), leave the drone's thrust as declared."""
+    from sim2real.sysid.system import System
+
+    (tmp_path / "drone.xml").write_text(_DRONE.replace("CAMERA", ""))
+    system = System(str(tmp_path / "drone.xml"))
+    spec = system.spec
+    reach = 2 * (np.hypot(0.12, 0.12) + 0.01)   # twice the arms' reach from the centre
+    assert (spec["payload_x:quad"].low, spec["payload_x:quad"].high) == pytest.approx((-reach, reach), rel=1e-5)
+    assert spec["gain:m1"].default == pytest.approx(np.hypot(1, 0.02))
+    z = spec.default.copy()
+    for name, v in {"payload:quad": 0.12, "payload_x:quad": 0.04, "payload_y:quad": -0.01, "payload_z:quad": -0.05}.items():
+        z[spec.index(name)] = v
+    fitted, nominal = system.physics.apply(jnp.asarray(z)), system.physics.apply(jnp.asarray(spec.default))
+    truth = mujoco.MjModel.from_xml_string(_DRONE.replace(
+        "CAMERA", '<geom type="sphere" pos="0.04 -0.01 -0.05" size="0.0005" mass="0.12"/>'))
+    b = 1
+    assert float(fitted.body_mass[b]) == pytest.approx(truth.body_mass[b], rel=1e-6)
+    np.testing.assert_allclose(np.asarray(fitted.body_ipos[b]), truth.body_ipos[b], atol=1e-6)
+    # MuJoCo's tensor about the new centre, on the nominal body's principal axes
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, truth.body_iquat[b])
+    tensor = rot.reshape(3, 3) @ np.diag(truth.body_inertia[b]) @ rot.reshape(3, 3).T
+    mujoco.mju_quat2Mat(rot, np.asarray(nominal.body_iquat[b], float))
+    on_axes = np.diagonal(rot.reshape(3, 3).T @ tensor @ rot.reshape(3, 3))
+    np.testing.assert_allclose(np.asarray(fitted.body_inertia[b]), on_axes, rtol=1e-4)
+    np.testing.assert_allclose(np.asarray(nominal.actuator_gainprm[:, 0]), 1.0)   # (not scaled by 0)
+    assert "mass_offset@quad" in [c.label for c in _library(system)]
+
+
+def _library(system):
+    from sim2real.sysid.candidates import Scales, library
+
+    n = system.mj.njnt
+    sc = Scales(np.ones(n), np.ones(n), np.ones(n), np.ones(system.mj.nu), 0.005, 8, np.ones(n),
+                np.zeros(system.mj.nbody, bool))
+    return library(system, sc)
