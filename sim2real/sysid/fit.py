@@ -255,10 +255,9 @@ class Fitter:
             # where only the velocities' step helped, the parameters' steps were too long: the next
             # are shorter (a quadrotor's payload fitted from 4x its moment had every step rejected
             # for the velocities' and its damping cut each time, and never left its start)
-            velocities_only = best == len(trials) - 1
-            mu = mu * 10.0 if velocities_only else max(trials[best][0] * 0.3, 1e-6)
+            mu = mu * 10.0 if best == len(trials) - 1 else max(trials[best][0] * 0.3, 1e-6)
             z, v0, r0, phi = trials[best][1], trials[best][2], rs[best], phis[best]
-            if gain < tol and not (velocities_only and mu <= 1e6):
+            if gain < tol:
                 break
         # (the directions the steps left put are those reported; the errors are the misfit's)
         std, unidentified, corr = self._errors(H, sigma2, held_below(sigma2, self._correlation(r0)), names, scale)
