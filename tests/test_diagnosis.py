@@ -1487,7 +1487,6 @@ def test_a_tendon_driven_arm_is_diagnosed(tmp_path):
     assert (spec["saturation:tip_thruster"].unit, spec["saturation:cable_motor"].unit) == ("N", "Nm")
 
 
-
 def test_a_lag_shared_by_every_motor_is_named_as_one_when_asked(tmp_path):
     """Both motors of the 2-link arm env lag by 30 ms (MuJoCo's own filter in the truth). One
     actuator's lag explains half of that, a delay of the whole command more: the default search

@@ -5,7 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from sim2real.physics.kinds.base import Kind, name_of
+from sim2real.physics.kinds.base import Kind, actuator_joint, name_of
 from sim2real.physics.params import Param
 
 
@@ -23,9 +23,9 @@ def gear_size(m: mujoco.MjModel, a: int) -> float:
     with its drag torque); its first entry, 0, made the gain's default 0, and the gain law,
     scaled by value / default, was scaled by 0 instead of 1: the drone flew without thrust."""
     g = np.asarray(m.actuator_gear[a], float)
-    multi = int(m.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_SITE) or (
-        int(m.actuator_trntype[a]) in (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
-        and int(m.jnt_type[m.actuator_trnid[a, 0]]) in (int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_BALL)))
+    j = actuator_joint(m, a)
+    multi = (int(m.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_SITE)
+             or (j >= 0 and int(m.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_BALL))))
     return float(np.linalg.norm(g)) if multi else float(g[0])
 
 

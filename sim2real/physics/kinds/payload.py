@@ -88,17 +88,18 @@ class Payload(Kind):
             anchor, direction, _ = link_axis(m, p.index)
             pm.payload_axis[p.index] = (np.asarray(anchor, np.float32), np.asarray(direction, np.float32))
         # a payload_x/y/z triple moves it in the body's frame from where it would sit
-        pm.payload_offset = {}
+        offset = {}
         for k, axis in enumerate(_AXES):
             for i, p in pm.spec.of_kind(axis):
-                pm.payload_offset.setdefault(p.index, [0, 0, 0])[k] = i
+                offset.setdefault(p.index, [0, 0, 0])[k] = i
+        pm.payload_offset = {b: np.array(idx) for b, idx in offset.items()}   # body -> [3] indices into z
 
     def apply(self, pm, z, get, f) -> None:
         where = {p.index: z[i] for i, p in pm.spec.of_kind("payload_r")}
         for i, p in pm.spec.of_kind("payload"):
             shift = pm.payload_offset.get(p.index)
             f.update(self._add(pm, get, p.index, z[i], where.get(p.index),
-                               None if shift is None else z[jnp.asarray(shift)]))
+                               None if shift is None else z[shift]))
 
     @staticmethod
     def _add(pm, get, b: int, mp, r=None, shift=None):
