@@ -1786,3 +1786,40 @@ def test_joints_tied_by_an_equality_are_named_in_the_report():
     bodies = "".join(f'<body name="f{j}"><joint name="{j}" type="slide"/><geom size="0.01" mass="0.1"/></body>'
                      for j in "abcd")
     assert diag.tied_joints(mujoco.MjModel.from_xml_string(xml.format(bodies=bodies))) == {"a": ["b"], "b": ["a"]}
+
+
+def test_a_real_datasets_rerun_that_moves_is_told_apart_from_one_that_does_not():
+    """``benchmarks/real_datasets.py`` compares a rerun with the committed ``diagnosis.json``: the
+    same effects within ``tol`` are the same; another target, a value or a held-out error moved
+    beyond it, or an effect gained, is a move, each said."""
+    rd = _benchmark("real_datasets")
+    d = {"answer": "effects", "fit": {"before": 0.3, "after": 0.2}, "seconds": 10.0,
+         "selected": [{"effect": "joint_stiffness", "target": "j1", "params": {"stiffness:j1": 9.9}}]}
+    old = rd.summary(d)
+    assert rd.compare(old, rd.summary(d), tol=0.02) == []
+    near = json.loads(json.dumps(d))
+    near["selected"][0]["params"]["stiffness:j1"] = 9.95
+    assert rd.compare(old, rd.summary(near), tol=0.02) == []
+    far = json.loads(json.dumps(near))
+    far["selected"][0]["params"]["stiffness:j1"] = 11.0
+    far["fit"]["after"] = 0.25
+    assert rd.compare(old, rd.summary(far), tol=0.02) == ["joint_stiffness@j1 stiffness:j1 9.9 -> 11",
+                                                          "held-out after 0.2 -> 0.25"]
+    moved = json.loads(json.dumps(d))
+    moved["selected"][0]["target"] = "j2"
+    moved["selected"].append({"effect": "coulomb_friction", "target": "j3", "params": {"coulomb:j3": 0.1}})
+    assert rd.compare(old, rd.summary(moved), tol=0.02) == [
+        "named joint_stiffness@j1 -> joint_stiffness@j2, coulomb_friction@j3"]
+    assert rd.compare(old, rd.summary({**d, "answer": "none", "selected": []}), tol=0.02) == [
+        "answer effects -> none", "named joint_stiffness@j1 -> nothing"]
+    # every run's files are bundled, and each has its committed result
+    for name, run in rd._runs().items():
+        assert all(os.path.exists(os.path.join(ROOT, p)) for p in (run.model,) + run.recordings + run.heldout), name
+        assert os.path.exists(os.path.join(rd.COMMITTED, name, "diagnosis.json")), name
+
+
+@pytest.mark.slow  # a 10 s diagnosis of a real pendulum (make test-slow)
+def test_the_committed_dfki_pendulum_result_is_reproduced(tmp_path):
+    rd = _benchmark("real_datasets")
+    assert rd.main(rd.Settings(only="dfki_pendulum_swapped", out=str(tmp_path))) == 0
+    assert "1 of 1 the same" in (tmp_path / "drift.md").read_text()
