@@ -52,3 +52,20 @@ def test_bundled_configs_by_name(tmp_path, monkeypatch):
         config_lib.load(TrainConfig, ["config=nope"])
     with pytest.raises(config_lib.ConfigError, match="'nope.yaml' not found"):
         config_lib.load(TrainConfig, ["config=nope.yaml"])
+
+
+def test_the_commands_keep_compiled_programs_where_the_environment_says():
+    """``common/compile_cache``: the folder from ``SIM2REAL_COMPILE_CACHE`` (``off``: none), else
+    under ``XDG_CACHE_HOME`` or ``~/.cache``; a cache folder already set (the user's, or this test
+    session's own from conftest) is left as it is."""
+    import jax
+
+    from sim2real.common import compile_cache as cc
+
+    assert cc.cache_dir({"SIM2REAL_COMPILE_CACHE": "/data/xla"}) == "/data/xla"
+    assert cc.cache_dir({"SIM2REAL_COMPILE_CACHE": "off", "XDG_CACHE_HOME": "/c"}) is None
+    assert cc.cache_dir({"XDG_CACHE_HOME": "/c"}) == os.path.join("/c", "sim2real", "xla")
+    assert cc.cache_dir({}) == os.path.join(os.path.expanduser("~"), ".cache", "sim2real", "xla")
+    before = jax.config.jax_compilation_cache_dir
+    assert before  # conftest's per-session folder
+    assert cc.enable() == before and jax.config.jax_compilation_cache_dir == before

@@ -10,6 +10,7 @@ set as key=value. Writes DIR/diagnosis.json, DIR/report.md, DIR/fitted.xml and t
 import os
 import sys
 
+from sim2real.common import compile_cache
 from sim2real.common.cli import main_guard
 
 
@@ -64,6 +65,7 @@ def run(argv=None):
         parallel.use_cpu_cores(min(parallel.cpu_cores(), shooting.B))
     except RuntimeError:
         pass
+    compile_cache.enable()  # compiled programs kept between runs (common/compile_cache.py says why)
     main_guard(main, sys.argv[1:] if argv is None else argv, doc=__doc__, configs=HELP)
 
 

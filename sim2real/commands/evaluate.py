@@ -15,6 +15,7 @@ evaluation, seed 004 Fig. 1); the un-adapted returns go to ``returns_before.csv`
 """
 import sys
 
+from sim2real.common import compile_cache
 from sim2real.common.cli import main_guard
 
 
@@ -36,6 +37,7 @@ HELP = ('sim2real.tools.evaluate:EvaluateConfig',)  # the typed configs whose ke
 
 def run(argv=None):
     """Console entry point ``sim2real-evaluate`` (and ``python -m sim2real evaluate``)."""
+    compile_cache.enable()  # compiled programs kept between runs (common/compile_cache.py says why)
     main_guard(main, sys.argv[1:] if argv is None else argv, doc=__doc__, configs=HELP)
 
 

@@ -18,6 +18,7 @@ import json
 import os
 import sys
 
+from sim2real.common import compile_cache
 from sim2real.common.cli import main_guard
 
 
@@ -85,6 +86,7 @@ HELP = ('sim2real.tools.loop:LoopConfig', 'sim2real.training.runs:TrainConfig') 
 
 def run(argv=None):
     """Console entry point ``sim2real-loop`` (and ``python -m sim2real loop``)."""
+    compile_cache.enable()  # compiled programs kept between runs (common/compile_cache.py says why)
     main_guard(main, sys.argv[1:] if argv is None else argv, doc=__doc__, configs=HELP)
 
 

@@ -14,6 +14,7 @@ fall) on to its full length. Writes ``DIR/episode_000.csv``... and ``DIR/record.
 import os
 import sys
 
+from sim2real.common import compile_cache
 from sim2real.common.cli import main_guard
 
 
@@ -50,6 +51,7 @@ HELP = ('sim2real.tools.record:RecordConfig',)  # the typed configs whose keys `
 
 def run(argv=None):
     """Console entry point ``sim2real-record`` (and ``python -m sim2real record``)."""
+    compile_cache.enable()  # compiled programs kept between runs (common/compile_cache.py says why)
     main_guard(main, sys.argv[1:] if argv is None else argv, doc=__doc__, configs=HELP)
 
 

@@ -9,6 +9,7 @@ needs imageio-ffmpeg. Headless: EGL, else OSMesa (``MUJOCO_GL`` overrides).
 """
 import sys
 
+from sim2real.common import compile_cache
 from sim2real.common.cli import main_guard
 
 
@@ -27,6 +28,7 @@ HELP = ('sim2real.tools.render:RenderConfig',)  # the typed configs whose keys `
 
 def run(argv=None):
     """Console entry point ``sim2real-render`` (and ``python -m sim2real render``)."""
+    compile_cache.enable()  # compiled programs kept between runs (common/compile_cache.py says why)
     main_guard(main, sys.argv[1:] if argv is None else argv, doc=__doc__, configs=HELP)
 
 

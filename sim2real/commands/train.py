@@ -5,6 +5,7 @@ can be overridden. ``resume=true`` continues the run folder's latest checkpoint.
 """
 import sys
 
+from sim2real.common import compile_cache
 from sim2real.common.cli import main_guard
 
 
@@ -27,6 +28,7 @@ HELP = ('sim2real.training.runs:TrainConfig',)  # the typed configs whose keys `
 
 def run(argv=None):
     """Console entry point ``sim2real-train`` (and ``python -m sim2real train``)."""
+    compile_cache.enable()  # compiled programs kept between runs (common/compile_cache.py says why)
     main_guard(main, sys.argv[1:] if argv is None else argv, doc=__doc__, configs=HELP)
 
 
