@@ -9,8 +9,11 @@ import tempfile
 import jax  # noqa: E402
 
 # identical programs compiled again (each train() builds fresh closures) come from disk; a fresh
-# folder per session, so nothing compiled on another machine is ever loaded
-jax.config.update("jax_compilation_cache_dir", tempfile.mkdtemp(prefix="sim2real-jax-cache-"))
+# folder per session, so nothing compiled on another machine is ever loaded. The commands run as
+# subprocesses use it too (common/compile_cache.py) instead of the user's ~/.cache.
+_CACHE = tempfile.mkdtemp(prefix="sim2real-jax-cache-")
+jax.config.update("jax_compilation_cache_dir", _CACHE)
+os.environ["SIM2REAL_COMPILE_CACHE"] = _CACHE
 jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
 # Most tests spend their time compiling (a PPO update, a training chunk, a batched rollout) and
 # run the result briefly: they compile with most of XLA's optimisations off, which compiles 2-3x
