@@ -189,6 +189,9 @@ def ctrl_limits(m: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
 
 
 _DIRECT = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
+# joints that turn every way (a drone's free joint, a ball): a gear on one is a direction, not a
+# ratio (``gain.gear_size``), and a payload on the body they carry sits anywhere in its frame
+TURNING = (int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_BALL))
 
 
 def actuator_joint(m: mujoco.MjModel, a: int) -> int:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from sim2real.physics.kinds.base import Kind, actuator_joint, name_of
+from sim2real.physics.kinds.base import TURNING, Kind, actuator_joint, name_of
 from sim2real.physics.params import Param
 
 
@@ -25,7 +25,7 @@ def gear_size(m: mujoco.MjModel, a: int) -> float:
     g = np.asarray(m.actuator_gear[a], float)
     j = actuator_joint(m, a)
     multi = (int(m.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_SITE)
-             or (j >= 0 and int(m.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_BALL))))
+             or (j >= 0 and int(m.jnt_type[j]) in TURNING))
     return float(np.linalg.norm(g)) if multi else float(g[0])
 
 

@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 
 from sim2real.physics import massprops
-from sim2real.physics.kinds.base import BODY, Kind, name_of
+from sim2real.physics.kinds.base import BODY, TURNING, Kind, name_of
 from sim2real.physics.params import Param
 
 
@@ -31,7 +31,6 @@ def link_axis(m: mujoco.MjModel, b: int) -> tuple[np.ndarray, np.ndarray, float]
 
 
 _AXES = ("payload_x", "payload_y", "payload_z")
-_TURNS = (int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_BALL))
 
 
 def body_reach(m: mujoco.MjModel, b: int) -> float:
@@ -51,7 +50,7 @@ def position_params(m: mujoco.MjModel, bodies) -> list[Param]:
     for b in bodies:
         ax = link_axis(m, b)
         if ax is None:
-            if m.body_jntnum[b] == 1 and int(m.jnt_type[m.body_jntadr[b]]) in _TURNS:
+            if m.body_jntnum[b] == 1 and int(m.jnt_type[m.body_jntadr[b]]) in TURNING:
                 reach = round(2 * body_reach(m, b), 6)
                 name = name_of(m, mujoco.mjtObj.mjOBJ_BODY, b)
                 ps += [Param(f"{k}:{name}", 0.0, -reach, reach, "m", f"the payload's {k[-1]} from the centre of mass "
