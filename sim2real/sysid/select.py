@@ -350,6 +350,7 @@ class Selector:
         self.step_level = float(step_level)
         self._finer, self._fine = finer, _UNBUILT
         self._fine_fits: dict = {}
+        self._dropped: dict = {}        # (id(M), id(c)) -> (M, c, M without c): ``_without``'s fits
         self.allowed = None if allowed is None else set(allowed)
         sh = fitter.sh
         self.fit_tiles, self.val_tiles = sh.tiles.of("fit"), sh.tiles.of("val")
@@ -1136,8 +1137,16 @@ class Selector:
 
     def _without(self, M: Model, c: Candidate) -> Model:
         """``M`` re-fitted without effect ``c`` (its parameters back at their neutral values), not
-        validated: the swap only screens and fits on it (``_without_all`` validates what it returns)."""
-        return self.fit([e for e in M.effects if e is not c], self._neutral(M.z, [c]), M.result.v0)
+        validated: the swap only screens and fits on it (``_without_all`` validates what it returns).
+
+        The fit is a function of ``M`` and ``c`` alone, and the swap, the rotor's trial in place of
+        a band and the backward check each ask for it of the same final model: it is made once
+        (the same numbers; a 3-link arm's diagnosis made 27 of its 434 simulator calls twice)."""
+        key = (id(M), id(c))
+        if key not in self._dropped:  # (M and c kept with it: their ids stay theirs)
+            self._dropped[key] = (M, c, self.fit([e for e in M.effects if e is not c], self._neutral(M.z, [c]),
+                                                 M.result.v0))
+        return self._dropped[key][2]
 
     def _units(self, M: Model) -> list[list[Candidate]]:
         """``M``'s effects as the backward check judges them: one by one, except a pair that
