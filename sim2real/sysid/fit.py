@@ -213,11 +213,12 @@ class Fitter:
         V = np.eye(len(names))
         sigma2 = 1.0
         age = None  # iterations since the Jacobian was computed
+        here = False  # the Jacobian is the current point's (no step taken since it was computed)
         for it in range(1, iters + 1):
             if age is None or age >= 2:
                 # (a Jacobian serves two steps: the second reuses it at the new point, a chord step)
                 r0, J_t, J_v = self.jacobian(z, v0, names, tiles, r0)
-                age = 0
+                age, here = 0, True
             else:
                 # the residual moved; the linear model around the old point is shifted to the new one
                 pass
@@ -249,7 +250,9 @@ class Fitter:
                 mu *= 10.0
                 if mu > 1e6:
                     break
-                age = None  # a rejected step: fresh Jacobian
+                # a rejected step: a fresh Jacobian, unless the one in hand is this point's already
+                # (computing it again gave the same numbers: 40 of a 3-link arm's 402 calls)
+                age = 0 if here else None
                 continue
             gain = (phi - phis[best]) / max(phi, 1e-300)
             # where only the velocities' step helped, the parameters' steps were too long: the next
@@ -257,6 +260,7 @@ class Fitter:
             # for the velocities' and its damping cut each time, and never left its start)
             mu = mu * 10.0 if best == len(trials) - 1 else max(trials[best][0] * 0.3, 1e-6)
             z, v0, r0, phi = trials[best][1], trials[best][2], rs[best], phis[best]
+            here = False
             if gain < tol:
                 break
         # (the directions the steps left put are those reported; the errors are the misfit's)
