@@ -7,7 +7,7 @@ settings, a training resumed) XLA would compile the very same programs again. JA
 programs on disk, keyed by the program, its shapes, the backend and the jax and jaxlib versions;
 a hit loads the program the compile would have made, so results do not change (a diagnosis run
 cold and then from the cache gave the same ``diagnosis.json``: 43.4 -> 37.1 s for the arm,
-10.8 -> 8.1 s for the DFKI pendulum).
+11.2 -> 8.5 s for the DFKI pendulum).
 
 Where: ``$SIM2REAL_COMPILE_CACHE``, else ``$XDG_CACHE_HOME/sim2real/xla``, else
 ``~/.cache/sim2real/xla``; ``SIM2REAL_COMPILE_CACHE=off`` leaves it off. Programs that compiled
