@@ -25,6 +25,8 @@ import time
 
 from sim2real.common.cli import settings
 
+import diagnosis_independent
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 COMMITTED = os.path.join(HERE, "results", "real_datasets")
@@ -65,14 +67,17 @@ def _runs() -> dict[str, Run]:
 
 def summary(d: dict) -> dict:
     """What the README quotes of a ``diagnosis.json``: the answer, the named effects in order
-    (``effect@target`` -> fitted values), the held-out error before and after, the seconds."""
+    (``effect@target`` -> fitted values), the held-out error before and after."""
     named = {}
     for s in d.get("selected", []):
         if s["effect"] != "none":
             named[f"{s['effect']}@{s['target']}"] = {k: float(v) for k, v in s["params"].items()}
     fit = d.get("fit") or {}
-    return {"answer": d.get("answer"), "named": named, "before": fit.get("before"), "after": fit.get("after"),
-            "seconds": d.get("seconds")}
+    return {"answer": d.get("answer"), "named": named, "before": fit.get("before"), "after": fit.get("after")}
+
+
+def _g(x) -> str:
+    return "?" if x is None else f"{x:.4g}"
 
 
 def _rel(a, b) -> float:
@@ -94,18 +99,16 @@ def compare(old: dict, new: dict, tol: float) -> list[str]:
             for p, v in vals.items():
                 w = new["named"][key].get(p)
                 if _rel(v, w) > tol:
-                    why.append(f"{key} {p} {v:.4g} -> {w if w is None else format(w, '.4g')}")
+                    why.append(f"{key} {p} {_g(v)} -> {_g(w)}")
     for k in ("before", "after"):
         if _rel(old[k], new[k]) > tol:
-            why.append(f"held-out {k} {old[k]:.4g} -> {new[k]:.4g}" if None not in (old[k], new[k])
-                       else f"held-out {k} {old[k]} -> {new[k]}")
+            why.append(f"held-out {k} {_g(old[k])} -> {_g(new[k])}")
     return why
 
 
 def _line(s: dict) -> str:
-    named = "; ".join(f"{k} " + ", ".join(f"{p}={v:.4g}" for p, v in vals.items()) for k, vals in s["named"].items())
-    fmt = lambda x: "?" if x is None else f"{x:.4g}"  # noqa: E731
-    return f"{s['answer']}: {named or 'nothing named'}; held-out {fmt(s['before'])} -> {fmt(s['after'])}"
+    named = "; ".join(f"{k} " + ", ".join(f"{p}={_g(v)}" for p, v in vals.items()) for k, vals in s["named"].items())
+    return f"{s['answer']}: {named or 'nothing named'}; held-out {_g(s['before'])} -> {_g(s['after'])}"
 
 
 @dataclasses.dataclass
@@ -129,23 +132,23 @@ def main(args: Settings) -> int:
         parallel.use_cpu_cores(min(parallel.cpu_cores(), shooting.B))
     except RuntimeError:  # JAX already running (a test calling main): its devices as they are
         pass
-    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose
-
     out = os.path.abspath(args.out)
     cwd = os.getcwd()
     os.chdir(ROOT)  # the runs' paths, and so their diagnosis.json, are relative to the repository
     try:
-        return _rerun(args, out, DiagnoseConfig, diagnose)
+        return _rerun(args, out)
     finally:
         os.chdir(cwd)
 
 
-def _rerun(args: Settings, out: str, DiagnoseConfig, diagnose) -> int:
+def _rerun(args: Settings, out: str) -> int:
+    from sim2real.sysid.diagnose import DiagnoseConfig, diagnose  # (after the cores are declared)
+
     runs = _runs()
     chosen = [n for n in runs if not args.only or any(o and o in n for o in args.only.split(","))]
     if not chosen:
         raise SystemExit(f"only={args.only}: no run's name contains it; the runs: {', '.join(runs)}")
-    lines, moved = [f"# Real datasets rerun ({time.strftime('%Y-%m-%d %H:%M')}, commit {_commit()}, tol {args.tol:g})", ""], []
+    lines, moved = [f"# Real datasets rerun ({time.strftime('%Y-%m-%d %H:%M')}, commit {diagnosis_independent._commit()}, tol {args.tol:g})", ""], []
     for name in chosen:
         run = runs[name]
         folder = os.path.join(COMMITTED if args.write else out, name)
@@ -179,13 +182,6 @@ def _rerun(args: Settings, out: str, DiagnoseConfig, diagnose) -> int:
         f.write("\n".join(lines) + "\n")
     print(lines[-1])
     return 1 if moved and not args.write else 0
-
-
-def _commit() -> str:
-    import subprocess
-
-    r = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT)
-    return r.stdout.strip() or "?"
 
 
 if __name__ == "__main__":

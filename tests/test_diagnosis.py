@@ -1792,6 +1792,7 @@ def test_a_real_datasets_rerun_that_moves_is_told_apart_from_one_that_does_not()
     """``benchmarks/real_datasets.py`` compares a rerun with the committed ``diagnosis.json``: the
     same effects within ``tol`` are the same; another target, a value or a held-out error moved
     beyond it, or an effect gained, is a move, each said."""
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))  # (its sibling diagnosis_independent)
     rd = _benchmark("real_datasets")
     d = {"answer": "effects", "fit": {"before": 0.3, "after": 0.2}, "seconds": 10.0,
          "selected": [{"effect": "joint_stiffness", "target": "j1", "params": {"stiffness:j1": 9.9}}]}
@@ -1820,6 +1821,7 @@ def test_a_real_datasets_rerun_that_moves_is_told_apart_from_one_that_does_not()
 
 @pytest.mark.slow  # a 10 s diagnosis of a real pendulum (make test-slow)
 def test_the_committed_dfki_pendulum_result_is_reproduced(tmp_path):
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     rd = _benchmark("real_datasets")
     assert rd.main(rd.Settings(only="dfki_pendulum_swapped", out=str(tmp_path))) == 0
     assert "1 of 1 the same" in (tmp_path / "drift.md").read_text()
