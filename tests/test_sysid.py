@@ -509,7 +509,44 @@ def test_contacts_no_recorded_pose_comes_near_are_left_out_of_the_simulation(tmp
     assert swing(1.5) == ((), "")   # nearest 0.012 m: within 1 cm and a sample's travel
 
 
-def test_fitted_xml_of_a_model_with_meshes_loads_from_the_diagnosis_folder(tmp_path):
+def test_range_limits_no_recorded_position_comes_near_are_left_out_of_the_simulation(tmp_path):
+    """A pendulum and a slide with ranges (MuJoCo limits a joint with a range): a swing that stays
+    far inside the hinge's range leaves its limit out (the System built with ``unlimited`` has it
+    off, and simulates the swing exactly as the limited model does); the slide, pushed to within
+    a tenth of its span of an end, keeps its limit; a swing that nears the hinge's end keeps both."""
+    import mujoco
+
+    from sim2real.sysid.system import System
+
+    path = str(tmp_path / "limited.xml")
+    open(path, "w").write("""<mujoco><compiler angle="radian"/><worldbody>
+      <body name="rod" pos="0 0 1"><joint name="hinge" axis="0 1 0" range="-2 2"/>
+      <geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.02" mass="0.4"/>
+      <body name="bead"><joint name="slide" type="slide" axis="0 0 1" range="-0.1 0.1"/>
+      <geom type="sphere" size="0.02" mass="0.1"/></body></body></worldbody>
+      <actuator><motor name="m" joint="hinge"/></actuator></mujoco>""")
+    system = System(path, dt=0.01)
+    t = 0.01 * np.arange(100)
+
+    def clear(amplitude):
+        save_csv(str(tmp_path / "r.csv"), t, {"qpos:hinge": amplitude * np.sin(t * 3), "qpos:slide": 0.085 + 0 * t,
+                                              "ctrl:m": 0.1 * np.sin(t * 5)})
+        return system.limits_clear([load(str(tmp_path / "r.csv"), system.mj)])
+
+    unlimited, note = clear(1.0)   # 1 rad of room, 0.4 asked (a tenth of the span) plus a sample's 0.03
+    assert unlimited == (0,) and "the range limits of 1 of 2 limited joints left out of the simulation (hinge)" in note
+    free = System(path, dt=0.01, unlimited=unlimited).mj
+    assert list(free.jnt_limited) == [0, 1] and list(system.mj.jnt_limited) == [1, 1]
+    runs = []
+    for m in (system.mj, free):
+        d = mujoco.MjData(m)
+        d.qpos[:] = [0.0, 0.085]
+        for k in range(100):
+            d.ctrl[:] = 0.1 * np.sin(k * 0.05)
+            mujoco.mj_step(m, d)
+        runs.append(d.qpos.copy())
+    np.testing.assert_array_equal(*runs)
+    assert clear(1.7) == ((), "")   # 0.3 rad of room: within a tenth of the span
     """A link drawn from a mesh under the model's ``meshdir``: the fitted file, written in another
     folder, finds the same mesh (it did not load there: "Error opening file 'assets/link.obj'")."""
     from sim2real.sysid.export import write_fitted_mjcf

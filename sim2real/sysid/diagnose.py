@@ -629,12 +629,15 @@ def _run(cfg: DiagnoseConfig, out: str) -> dict:
                              f"bodies: {', '.join(system.bodies[1:])})")
         for r in train + held:
             system.check_recording_covers(r)
+        # contacts no recorded pose comes near and range limits no recorded position comes near,
+        # left out of every simulation (System.bodies_apart, System.limits_clear)
         apart, apart_note = system.bodies_apart(train + held)
-        if apart:  # (contacts no recorded pose comes near, left out of every simulation: System.bodies_apart)
-            build = functools.partial(build, apart=apart)
+        unlimited, unlimited_note = system.limits_clear(train + held)
+        if apart or unlimited:
+            build = functools.partial(build, apart=apart, unlimited=unlimited)
             system = build()
         built_notes = len(system.notes)  # (the model's own; the data's are added below)
-        system.notes += [apart_note] if apart else []
+        system.notes += [x for x in (apart_note, unlimited_note) if x]
         window = int(round(cfg.window_seconds / dt)) | 1 if cfg.window_seconds > 0 else None
         trajs = [from_recording(r, system, window) for r in train + held]
         # (what reading them did: jittered stamps resampled, a wrapped angle unwrapped)

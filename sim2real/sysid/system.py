@@ -162,17 +162,20 @@ class System:
         (``DiagnoseConfig.mass_above``).
       apart: body-id pairs whose contacts are left out of the simulation (``bodies_apart``).
       left_out_contacts: the geom pairs MJX cannot collide, left out (``_leave_out_contacts``).
+      unlimited: joint ids whose range limits are left out of the simulation (``limits_clear``).
     """
 
     def __init__(self, xml_path: str, dt: float | None = None, coulomb_eps: float = 1e-3, max_delay: int = 8,
                  refit_gains: bool = False, substeps: int | None = None, mass_above: float = 0.0,
-                 apart: tuple = ()):
+                 apart: tuple = (), unlimited: tuple = ()):
         m = _load(xml_path)
         self.xml_path = xml_path
         self.mass_above = float(mass_above)
         self.notes: list[str] = []
         check_model(m, xml_path)
         m, self.left_out_contacts = _leave_out_contacts(m, xml_path, self.notes, apart)
+        self.unlimited = tuple(int(j) for j in unlimited)
+        m.jnt_limited[list(self.unlimited)] = 0  # (``limits_clear`` says why; fitted.xml keeps them: export reads the file)
         self.columns = ModelColumns(m, xml_path)
         jn = self.columns.joints
         self._adapt(m, dt, substeps)
@@ -341,6 +344,37 @@ class System:
                        f"what one sample's motion could close (the least room left {gap:.3g} m; "
                        + ", ".join(f"'{self.bodies[a] or a}'-'{self.bodies[b] or b}'" for a, b in apart)
                        + "), and MJX would collide each pair at every step")
+
+    def limits_clear(self, recs, share: float = 0.1) -> tuple[tuple[int, ...], str]:
+        """The limited hinges and slides whose range no recorded position comes near: every sample
+        of ``recs`` stays further than ``share`` of the range's span from both ends, beyond the
+        joint's margin and the most its position changes between two samples; and a note saying
+        so (``System(unlimited=...)`` leaves their limits out). Why: MJX carries every limited
+        joint through the constraint solver at every step, reached or not (a 3-link arm whose
+        ranges no recording comes within 3.9 rad of diagnosed 1.4x slower), and a limit never
+        reached exerts no force: the predictions of the recordings are the same without it."""
+        m = self.mj
+        lim = [j for j in self.one_dof if m.jnt_limited[j]]
+        if not lim:
+            return (), ""
+        adr = np.array([m.jnt_qposadr[j] for j in lim])
+        lo, hi = m.jnt_range[lim, 0], m.jnt_range[lim, 1]
+        room = np.full(len(lim), np.inf)
+        step = np.zeros(len(lim))
+        for rec in recs:
+            q = self.columns.arrays(rec)[0][:, adr]
+            room = np.minimum(room, np.minimum(q.min(0) - lo, hi - q.max(0)))
+            if len(q) > 1:
+                step = np.maximum(step, np.abs(np.diff(q, axis=0)).max(0))
+        need = share * (hi - lo) + m.jnt_margin[lim] + step
+        clear = tuple(int(j) for j, r, n in zip(lim, room, need) if r > n)
+        if not clear:
+            return (), ""
+        jn = self.columns.joints
+        return clear, (f"the range limits of {len(clear)} of {len(lim)} limited joints left out of the simulation "
+                       f"({', '.join(jn[j] for j in clear)}): no recorded position comes within {share:g} of the "
+                       "range's span of either end, beyond the joint's margin and one sample's motion, and MJX "
+                       "would carry each limit through the constraint solver at every step")
 
     def arrays(self, rec):
         """Recording -> model-order arrays (``trajectory.ModelColumns.arrays``)."""
