@@ -547,6 +547,9 @@ def test_range_limits_no_recorded_position_comes_near_are_left_out_of_the_simula
         runs.append(d.qpos.copy())
     np.testing.assert_array_equal(*runs)
     assert clear(1.7) == ((), "")   # 0.3 rad of room: within a tenth of the span
+
+
+def test_fitted_xml_of_a_model_with_meshes_loads_from_the_diagnosis_folder(tmp_path):
     """A link drawn from a mesh under the model's ``meshdir``: the fitted file, written in another
     folder, finds the same mesh (it did not load there: "Error opening file 'assets/link.obj'")."""
     from sim2real.sysid.export import write_fitted_mjcf
