@@ -513,9 +513,11 @@ def test_range_limits_no_recorded_position_comes_near_are_left_out_of_the_simula
     """A pendulum and a slide with ranges (MuJoCo limits a joint with a range): a swing that stays
     far inside the hinge's range leaves its limit out (the System built with ``unlimited`` has it
     off, and simulates the swing exactly as the limited model does); the slide, pushed to within
-    a tenth of its span of an end, keeps its limit; a swing that nears the hinge's end keeps both."""
+    a tenth of its span of an end, keeps its limit; a swing that nears the hinge's end keeps both.
+    ``fitted.xml`` keeps every limit (the export starts from the user's file)."""
     import mujoco
 
+    from sim2real.sysid.export import write_fitted_mjcf
     from sim2real.sysid.system import System
 
     path = str(tmp_path / "limited.xml")
@@ -535,8 +537,11 @@ def test_range_limits_no_recorded_position_comes_near_are_left_out_of_the_simula
 
     unlimited, note = clear(1.0)   # 1 rad of room, 0.4 asked (a tenth of the span) plus a sample's 0.03
     assert unlimited == (0,) and "the range limits of 1 of 2 limited joints left out of the simulation (hinge)" in note
-    free = System(path, dt=0.01, unlimited=unlimited).mj
+    unbound = System(path, dt=0.01, unlimited=unlimited)
+    free = unbound.mj
     assert list(free.jnt_limited) == [0, 1] and list(system.mj.jnt_limited) == [1, 1]
+    write_fitted_mjcf(path, unbound, np.array(unbound.spec.default, float), {}, str(tmp_path / "fitted.xml"))
+    assert list(mujoco.MjModel.from_xml_path(str(tmp_path / "fitted.xml")).jnt_limited) == [1, 1]   # (kept there)
     runs = []
     for m in (system.mj, free):
         d = mujoco.MjData(m)

@@ -374,7 +374,7 @@ class System:
         return clear, (f"the range limits of {len(clear)} of {len(lim)} limited joints left out of the simulation "
                        f"({', '.join(jn[j] for j in clear)}): no recorded position comes within {share:g} of the "
                        "range's span of either end, beyond the joint's margin and one sample's motion, and MJX "
-                       "would carry each limit through the constraint solver at every step")
+                       "would carry each limit through the constraint solver at every step (fitted.xml keeps them)")
 
     def arrays(self, rec):
         """Recording -> model-order arrays (``trajectory.ModelColumns.arrays``)."""
