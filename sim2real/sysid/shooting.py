@@ -19,6 +19,7 @@ position, a filter at the first command (the system at rest); the diagnosis says
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import jax
 import jax.numpy as jnp
@@ -379,8 +380,6 @@ class Shooting:
         zpad = np.concatenate([zs, np.repeat(zs[:1], self.B - b, 0)]).astype(real())
         vpad = np.concatenate([v0, np.repeat(v0[:1], self.B - b, 0)]).astype(real())
         out = {}
-        import time
-
         t0 = time.perf_counter()
         for c0 in range(0, k, self.Sc):
             t = np.asarray(tiles[c0: c0 + self.Sc])
