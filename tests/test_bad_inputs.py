@@ -89,6 +89,8 @@ D = ["model=robot.xml", "heldout=[b.csv]", "progress=false", "plots=false"]
 CASES = [
     # ---- recordings -------------------------------------------------------------------------------
     ("missing_file", "diagnose", D + ["recordings=[nope.csv]"], {}, "nope.csv: file not found"),
+    ("files_joined_by_commas", "diagnose", D + ["recordings=a.csv,c.csv"], {"a.csv": GOOD, "c.csv": GOOD},
+     "for several files write a list: '[a.csv, c.csv]'"),
     ("empty_file", "diagnose", D + ["recordings=[r.csv]"], {"r.csv": ""}, "r.csv: empty file"),
     ("header_only", "diagnose", D + ["recordings=[r.csv]"], {"r.csv": "time,qpos:hinge,ctrl:motor\n"},
      "r.csv: no data rows"),

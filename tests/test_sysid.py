@@ -554,6 +554,72 @@ def test_range_limits_no_recorded_position_comes_near_are_left_out_of_the_simula
     assert clear(1.7) == ((), "")   # 0.3 rad of room: within a tenth of the span
 
 
+def test_recordings_logged_in_degrees_get_a_hint_and_radians_none(tmp_path):
+    """A pendulum (native ``mj_step``, a 0.05 N m friction the model lacks) logged in radians, and
+    the same angles written in degrees: ``units.logged_units`` names the hinge and its unit for the
+    degrees, and says nothing for the radians; nor for a servo-driven slide logged in mm with its
+    setpoints (a linear system with its commands in the joint's unit: the data cannot tell)."""
+    import mujoco
+
+    from sim2real.sysid.system import System
+    from sim2real.sysid.trajectory import from_recording
+    from sim2real.sysid.units import logged_units
+
+    def recorded(xml, truth, name, cmd, col, act, scale):
+        path = str(tmp_path / f"{name}.xml")
+        open(path, "w").write(xml.format(truth=""))
+        m = mujoco.MjModel.from_xml_string(xml.format(truth=truth))
+        d = mujoco.MjData(m)
+        rows = []
+        for k in range(800):   # 4 s at 200 Hz from 1 ms physics
+            d.ctrl[:] = cmd(k * 0.005)
+            rows.append((k * 0.005, d.qpos[0] + 1e-4 * np.sin(7.3 * k), d.ctrl[0]))
+            for _ in range(5):
+                mujoco.mj_step(m, d)
+        t, q, u = map(np.array, zip(*rows))
+        system = System(path, dt=0.005)
+        hints = []
+        for s in (1.0, scale):
+            save_csv(str(tmp_path / "r.csv"), t, {col: q * s, act: u * (s if "slide" in name else 1.0)})
+            tr = from_recording(load(str(tmp_path / "r.csv"), system.mj), system)
+            hints.append(logged_units(system, np.array(system.spec.default, float), [tr], 20))
+        return hints
+
+    pendulum = """<mujoco><option timestep="0.001"/><worldbody><body name="rod" pos="0 0 1">
+      <joint name="hinge" axis="0 1 0" damping="0.01" {truth}/>
+      <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/></body></worldbody>
+      <actuator><motor name="m" joint="hinge"/></actuator></mujoco>"""
+    radians, degrees = recorded(pendulum, 'frictionloss="0.05"', "pendulum", lambda t: 0.8 * np.sin(2.1 * t) + 0.5 * np.sin(5.3 * t),
+                                "qpos:hinge", "ctrl:m", 180 / np.pi)
+    assert radians == ""
+    assert "read qpos:hinge as degrees (and their velocities)" in degrees and "convert the columns" in degrees
+    slide = """<mujoco><option timestep="0.001"/><worldbody><body name="cart">
+      <joint name="slide" type="slide" axis="1 0 0" damping="2" {truth}/>
+      <geom type="box" size="0.05 0.05 0.02" mass="1"/></body></worldbody>
+      <actuator><position name="p" joint="slide" kp="200" kv="10"/></actuator></mujoco>"""
+    assert recorded(slide, 'frictionloss="1"', "slide", lambda t: 0.1 * np.sign(np.sin(3 * t)), "qpos:slide", "ctrl:p",
+                    1000.0) == ["", ""]
+
+
+def test_commands_far_past_their_ctrlrange_are_noted(tmp_path):
+    """A position servo's setpoints logged in mm (230 against a ctrlrange of +-0.3 m): MuJoCo clamps
+    them, and the recording's notes say so, naming the column, the share of rows and the largest
+    value's row; commands within a span of the range (a controller's output past it) are not noted."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody><body><joint name="x" type="slide"/>
+      <geom size="0.05" mass="1"/></body></worldbody>
+      <actuator><position name="p" joint="x" kp="100" ctrlrange="-0.3 0.3"/></actuator></mujoco>""")
+    t = 0.01 * np.arange(100)
+    path = str(tmp_path / "r.csv")
+    for setpoint, noted in ((230e-3 * np.sin(t), False), (230 * np.sin(t), True)):
+        save_csv(path, t, {"qpos:x": setpoint, "ctrl:p": setpoint})
+        notes = [n for n in load(path, m).notes if "ctrlrange" in n]
+        assert bool(notes) == noted
+    assert "column 'ctrl:p' lies beyond the actuator's ctrlrange [-0.3, 0.3]" in notes[0]
+    assert "data row 100" in notes[0] and "(a setpoint in mm or degrees?)" in notes[0]
+
+
 def test_fitted_xml_of_a_model_with_meshes_loads_from_the_diagnosis_folder(tmp_path):
     """A link drawn from a mesh under the model's ``meshdir``: the fitted file, written in another
     folder, finds the same mesh (it did not load there: "Error opening file 'assets/link.obj'")."""

@@ -29,7 +29,7 @@ from scipy.optimize import least_squares
 from sim2real.common import output
 from sim2real.common.progress import Bar
 from sim2real.physics.kinds.base import actuator_joint
-from sim2real.sysid import energy, invdyn, locate, report
+from sim2real.sysid import energy, invdyn, locate, native, report
 from sim2real.sysid.candidates import ALL_EFFECTS, EFFECTS, actuator_force_scale, library, scales_from
 from sim2real.sysid.derivatives import velocity_state
 from sim2real.sysid.export import write_fitted_mjcf
@@ -39,6 +39,7 @@ from sim2real.sysid.select import FAR_MASS, TIMING, Model, SelectConfig, Selecto
 from sim2real.sysid.shooting import Shooting
 from sim2real.sysid.system import System
 from sim2real.sysid.trajectory import from_recording, moves, quantisation_noise, signal_scale
+from sim2real.sysid.units import logged_units
 
 
 @dataclasses.dataclass(frozen=True)
@@ -402,26 +403,6 @@ def diagnose(cfg: DiagnoseConfig) -> dict:
         return _run(cfg, tmp)
 
 
-def _native_rollout(m: mujoco.MjModel, d: mujoco.MjData, tr, s: int, steps: int, substeps: int, qpos, qvel,
-                    with_qvel: bool = False):
-    """Positions ``[steps, nq]`` (and velocities: ``[steps, nq + nv]`` ``with_qvel``) of the native
-    model from state ``(qpos, qvel)`` at sample ``s`` of ``tr`` through its recorded commands
-    (``substeps`` physics steps per sample); NaN past its end."""
-    d.qpos[:], d.qvel[:] = qpos, qvel
-    if m.na:
-        d.act[:] = 0.0
-    q = np.full((steps, m.nq + (m.nv if with_qvel else 0)), np.nan)
-    for k in range(min(steps, len(tr) - s - 1)):
-        d.ctrl[:] = tr.ctrl[s + k]
-        d.qfrc_applied[:] = tr.qfrc[s + k]
-        for _ in range(substeps):
-            mujoco.mj_step(m, d)
-        q[k, : m.nq] = d.qpos
-        if with_qvel:
-            q[k, m.nq:] = d.qvel
-    return q
-
-
 ROUGH = 3.0  # the smoothness estimate of the noise is replaced where the model's is this many times lower
 
 
@@ -456,7 +437,7 @@ def rough_motion_noise(system: System, tr, windows: int = 16, W: int = 6, finer:
     try:
         for s in np.linspace(1, T - W - 2, windows).astype(int):
             def resid(x, s=s):
-                q = _native_rollout(m, d, tr, s, W, sub, x[:nq], x[nq:])
+                q = native.rollout(m, d, tr, s, W, sub, x[:nq], x[nq:])
                 return np.concatenate([x[:nq] - tr.q[s], (q - tr.q[s + 1: s + 1 + W]).ravel()])
 
             x0 = np.concatenate([tr.q[s], velocity_state(tr.v[s], tr.a[s], h)])
@@ -493,7 +474,7 @@ def _native_runs(system: System, trajs, n: int, steps: int, starts: int = 3, sub
               for s in np.linspace(0, max(len(tr) - steps - 1, 0), starts).astype(int)]
     try:
         for i, s, v in at:
-            out.append(_native_rollout(m, d, trajs[i], s, steps, sub, trajs[i].q[s], v, with_qvel))
+            out.append(native.rollout(m, d, trajs[i], s, steps, sub, trajs[i].q[s], v, with_qvel))
     finally:
         m.opt.timestep = system.h
     return np.stack(out)
@@ -588,7 +569,7 @@ def choose_horizon(system: System, trajs, budget: int = 6000, max_seconds: float
     for tr in trajs:
         for s in np.linspace(0, max(len(tr) - n_max - 1, 0), 4).astype(int):
             v = velocity_state(tr.v[s], tr.a[s], system.h)
-            runs = [_native_rollout(m, d, tr, s, n_max, n, tr.q[s] + dq, v + dv) for dq, dv in (
+            runs = [native.rollout(m, d, tr, s, n_max, n, tr.q[s] + dq, v + dv) for dq, dv in (
                 (0.0, 0.0), (tr.sigma_q * rng.choice([-1, 1], m.nq), tr.sigma_v * rng.choice([-1, 1], m.nv)))]
             meas = tr.q[s + 1: s + 1 + n_max]
             meas = np.concatenate([meas, np.full((n_max - len(meas), m.nq), np.nan)])
@@ -1349,6 +1330,11 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     # (the nominal model's inverse-dynamics residual serves the mismatch table and the plots)
     rows = invdyn.rows(trajs[: len(train)])
     res0 = invdyn.residual(system, z0, trajs[: len(train)], rows)
+    if fit["left"]["unexplained"]:  # degrees logged for radians? (only a hint: ``units.py``)
+        hint = logged_units(system, z0, trajs[: len(train)], sh.H)
+        if hint:
+            fit["left"]["units"] = hint
+            notes.append(hint)
     res_fit = invdyn.residual(system, z_fit, trajs[: len(train)], rows)
     mismatch = _locate(system, sh, pred0, res0, res_fit)
     fitted_params = {n: float(z_fit[spec.index(n)]) for n in system.nominal}

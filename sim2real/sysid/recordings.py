@@ -229,6 +229,10 @@ READERS = {".csv": _read_csv, ".npz": _read_npz, ".mat": _read_mat, ".parquet": 
 def _read_table(path: str) -> dict[str, np.ndarray]:
     ext = os.path.splitext(path)[1].lower()
     if not os.path.exists(path):
+        parts = path.split(",")
+        if len(parts) > 1 and all(os.path.exists(q.strip()) for q in parts):  # recordings=a.csv,b.csv
+            raise RecordingError(f"{path}: file not found; for several files write a list: "
+                                 f"'[{', '.join(q.strip() for q in parts)}]' (brackets, quoted for the shell)")
         raise RecordingError(f"{path}: file not found")
     if os.path.isdir(path):
         raise RecordingError(f"{path}: is a folder, not a recording file")
@@ -338,6 +342,7 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
                                     "unless <compiler angle=\"radian\"/>" if in_rad else ""))
     for a, b in bounds:  # (a velocity integrated over a gap would compare with nothing)
         _check_velocity_scale(path, model, t[a:b], {k: v[a:b] for k, v in cols.items()})
+    notes = _commands_past_range(path, model, cols)
     steps = med / model.opt.timestep
     if med > MAX_PERIOD_S or steps > MAX_STEPS_PER_SAMPLE:
         raise RecordingError(f"{path}: column 'time': the samples are {med:.6g} s apart ({steps:.0f} of the model's "
@@ -345,7 +350,7 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
                              f"{MAX_STEPS_PER_SAMPLE} steps): time must be in seconds (milliseconds: divide by 1000; "
                              f"nanosecond stamps: by 1e9)")
     if len(bounds) == 1:
-        return [_on_grid(Recording(path, t, cols), model)]
+        return [_on_grid(Recording(path, t, cols, notes), model)]
     kept = [(a, b) for a, b in bounds if b - a >= MIN_SAMPLES]
     if not kept:
         raise RecordingError(f"{path}: samples lost at {len(starts)} places (data rows "
@@ -357,8 +362,34 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
             + ", ".join(f"{a + 1}-{b}" for a, b in kept)
             + (f" ({n - sum(b - a for a, b in kept)} samples in pieces under {MIN_SAMPLES} left out)"
                if len(kept) < len(bounds) else "") + ", each simulated from its own first state")
-    return [_on_grid(Recording(path, t[a:b], {k: v[a:b] for k, v in cols.items()}, [note] if i == 0 else [],
+    return [_on_grid(Recording(path, t[a:b], {k: v[a:b] for k, v in cols.items()}, notes + [note] if i == 0 else [],
                                rows=f"{a + 1}-{b}"), model) for i, (a, b) in enumerate(kept)]
+
+
+def _commands_past_range(path: str, model: mujoco.MjModel, cols: dict) -> list[str]:
+    """A note per command column that lies beyond its actuator's ``ctrlrange`` by more than the
+    range's span: MuJoCo clamps every command to the range, so the model is driven by the clamp,
+    not by what was sent. A command in other units (a position servo's setpoint in mm or degrees
+    reads 230 against +-0.3) or a ``ctrlrange`` that is not the hardware's; not refused, as a
+    controller's output may be logged before the driver clamps it (the twelfth probe wave's
+    linear axis, ``benchmarks/results/new_user_probes/twelfth_wave.txt``)."""
+    notes = []
+    base = os.path.splitext(os.path.basename(path))[0]
+    for a in range(model.nu):
+        col = cols.get(f"ctrl:{model.actuator(a).name}")
+        if col is None or not model.actuator_ctrllimited[a]:
+            continue
+        lo, hi = (float(x) for x in model.actuator_ctrlrange[a])
+        span = hi - lo
+        far = (col < lo - span) | (col > hi + span)
+        if far.any():
+            row = int(np.argmax(np.abs(col - (lo + hi) / 2)))
+            notes.append(f"{base}: column 'ctrl:{model.actuator(a).name}' lies beyond the actuator's ctrlrange "
+                         f"[{lo:.4g}, {hi:.4g}] by more than its span in {100 * far.mean():.3g}% of the rows (up to "
+                         f"{col[row]:.6g}, data row {row + 1}), and MuJoCo clamps every command to the range: a "
+                         "command in other units (a setpoint in mm or degrees?) or a ctrlrange that is not the "
+                         "hardware's")
+    return notes
 
 
 def _on_grid(rec: Recording, model: mujoco.MjModel) -> Recording:

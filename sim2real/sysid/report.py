@@ -339,7 +339,7 @@ def left_text(d: dict) -> str:
                 + (f", most on {worst[0]} ({worst[1]:.3g}x)" if worst else "")
                 + f"; models that hold every physics of their plant nearly always stay under {left['limit']:g}x. Physics "
                   "outside the candidates searched, an effect on several joints at once, or a parameter "
-                  "the fit could not reach.")
+                  "the fit could not reach" + (f"; or units: {left['units']}." if left.get("units") else "."))
     return (f"What is left on the check data is {size}, under {left['limit']:g}x, where models that hold every "
             "physics of their plant nearly always stay: no large motion is left unexplained (a smaller effect may "
             "still hide below what these recordings tell apart).")

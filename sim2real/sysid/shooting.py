@@ -31,6 +31,7 @@ from sim2real._precision import real
 from sim2real.envs import parallel
 from sim2real.physics import stepper
 from sim2real.physics.params import clip
+from sim2real.sysid import native
 from sim2real.sysid.derivatives import velocity_state
 from sim2real.sysid.trajectory import SPREAD_FLOOR, kink_error, moves, signal_scale, start_velocity
 
@@ -205,29 +206,8 @@ class Shooting:
 
     def _initial_activation(self, tr) -> tuple[np.ndarray, np.ndarray]:
         """A recording's activations at its first sample ``[na]``, and how they move with the
-        joints' positions there ``[na, nq]`` (an integrating servo's setpoint, ``_command_states``)."""
-        m = self.sys.mj
-        act, dact, d = np.zeros(m.na), np.zeros((m.na, m.nq)), None
-        for a in range(m.nu):
-            adr = m.actuator_actadr[a]
-            if adr < 0:
-                continue
-            if m.actuator_dyntype[a] == mujoco.mjtDyn.mjDYN_INTEGRATOR:
-                # an integrating servo holds its joint (or tendon) where it starts: its setpoint
-                # is the actuator's length there (gear x joint position for a joint)
-                if d is None:
-                    d = mujoco.MjData(m)
-                    d.qpos[:] = tr.q[0]
-                    mujoco.mj_forward(m, d)
-                    moment = np.zeros((m.nu, m.nv))
-                    mujoco.mju_sparse2dense(moment, d.actuator_moment, d.moment_rownnz, d.moment_rowadr,
-                                            d.moment_colind)
-                if m.actuator_biasprm[a, 1] != 0:   # (the moment [nv] on the positions' columns [nq])
-                    act[adr] = d.actuator_length[a]
-                    dact[adr, self.sys.columns.same_q] = moment[a, self.sys.columns.same_v]
-            else:  # filters: at rest under the first command
-                act[adr] = tr.ctrl[0, a]
-        return act, dact
+        joints' positions there ``[na, nq]`` (``native.activation_at``; ``_command_states``)."""
+        return native.activation_at(self.sys.mj, self.sys.columns, tr.q[0], tr.ctrl[0])
 
     def _act_step(self, act, u, h):
         """MuJoCo's activation dynamics for one step of length ``h`` (Euler; exact for filterexact)."""

@@ -1,0 +1,113 @@
+"""Recordings logged in other units than the model's: degrees for a hinge's radians, millimetres
+for a slide's metres.
+
+The model's joints are in rad and m; a logger that writes degrees (a servo's or a hobby encoder's
+native unit) gives angles 57x too large, and nothing else in the data says so: a pendulum logged
+in degrees was answered `none`, "the model misfits by 92.7x what the noise leaves", with no word on
+why (``benchmarks/results/new_user_probes/twelfth_wave.txt``). Where the kept model leaves motion
+unexplained, ``logged_units`` asks the nominal model whether the recordings read in another unit
+are predicted far better: short native-MuJoCo predictions from the recorded states under the
+recorded commands, their error over each signal's own spread (so a unit cancels where the
+physics is linear in it and a servo's command scales with its joint: such data cannot tell the
+units apart, and no hint is given). Only a hint: the answer is not changed by it.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import mujoco
+import numpy as np
+
+from sim2real.physics.model_apply import to_mjmodel
+from sim2real.sysid import native
+
+# (joint type: the scale that turns the other unit into the model's, the other unit's name)
+OTHER = {int(mujoco.mjtJoint.mjJNT_HINGE): (np.pi / 180.0, "degrees"),
+         int(mujoco.mjtJoint.mjJNT_SLIDE): (1e-3, "millimetres")}
+GAIN = 4.0  # read in the other unit, the predictions' error at most this share of the logged one's
+STARTS = 12  # predictions per recording
+
+
+def _scaled(tr, qa: list[int], da: list[int], acts: list[int], s, sa):
+    """``tr`` with the positions ``qa`` and their dofs ``da`` (velocities, accelerations, a measured
+    qvel) multiplied by ``s``, the commands ``acts`` by ``sa`` (the smoothing is linear: the same
+    as smoothing the scaled data)."""
+    q, v, a, u = tr.q.copy(), tr.v.copy(), tr.a.copy(), tr.ctrl.copy()
+    q[:, qa] *= s
+    v[:, da] *= s
+    a[:, da] *= s
+    u[:, acts] *= sa
+    qvel = None if tr.qvel is None else tr.qvel.copy()
+    if qvel is not None:
+        qvel[:, da] *= s
+    sigma_q = tr.sigma_q.copy()
+    sigma_q[qa] *= s
+    return dataclasses.replace(tr, q=q, v=v, a=a, ctrl=u, qvel=qvel, sigma_q=sigma_q)
+
+
+def _servos(m: mujoco.MjModel, joints: list[int]) -> list[int]:
+    """The actuators on ``joints`` whose command is a position or a velocity (a bias that pulls the
+    joint to it: ``position``, ``velocity``, an affine ``general``; ``intvelocity``)."""
+    on = [a for a in range(m.nu) if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT
+          and m.actuator_trnid[a, 0] in joints]
+    return [a for a in on if np.any(m.actuator_biasprm[a, 1:3] != 0)
+            or m.actuator_dyntype[a] == mujoco.mjtDyn.mjDYN_INTEGRATOR]
+
+
+def prediction_error(system, z, trajs, horizon: int) -> float:
+    """The nominal model's short predictions (``horizon`` samples, ``STARTS`` per recording, native
+    ``mj_step`` at the diagnosis' physics step) from the recorded positions and velocity estimates
+    under the recorded commands: RMS error over each position column's spread (its std over the
+    recordings, at least its noise); activations at rest where each starts (``native.activation_at``);
+    a diverged prediction counts as 1e3 (its squared error 1e6)."""
+    m = to_mjmodel(system.physics, z)
+    d = mujoco.MjData(m)
+    q_all = np.concatenate([tr.q for tr in trajs])
+    spread = np.maximum(q_all.std(0), np.max([tr.sigma_q for tr in trajs], 0))
+    sq = []
+    for tr in trajs:
+        hi = len(tr) - horizon - 1
+        for st in (np.linspace(tr.window, hi, STARTS).astype(int) if hi > tr.window else ()):
+            act = native.activation_at(m, system.columns, tr.q[st], tr.ctrl[st])[0] if m.na else None
+            mujoco.mj_resetData(m, d)
+            pred = native.rollout(m, d, tr, st, horizon, system.substeps, tr.q[st], tr.v[st], act=act)
+            e = (pred - tr.q[st + 1: st + 1 + horizon]) / spread
+            sq.append(1e6 if native.unstable(d) or not np.all(np.isfinite(e)) else float(np.mean(e ** 2)))
+    return float(np.sqrt(np.mean(sq))) if sq else float("nan")
+
+
+def logged_units(system, z, trajs, horizon: int) -> str:
+    """A sentence naming the joints whose recordings the nominal model ``z`` predicts at least
+    ``GAIN`` times better read in another unit (``OTHER``; ``prediction_error`` over ``horizon``
+    samples), or "" where none do.
+
+    Tried: every hinge and slide alone, all hinges, all slides, all of both (a logger writes every
+    angle in one unit), each with and without its servos' commands scaled; the largest group that
+    passes is named."""
+    m = system.mj
+    base = prediction_error(system, z, trajs, horizon)
+    if not np.isfinite(base):
+        return ""
+    by_type = {t: [j for j in range(m.njnt) if int(m.jnt_type[j]) == t] for t in OTHER}
+    every = [j for js in by_type.values() for j in js]
+    groups = [[j] for j in every] + [js for js in by_type.values() if len(js) > 1]
+    if every and len(every) > max(len(js) for js in by_type.values()):
+        groups.append(every)
+    best = None  # (joints, ratio, servos scaled)
+    for group in groups:
+        qa, da = [int(m.jnt_qposadr[j]) for j in group], [int(m.jnt_dofadr[j]) for j in group]
+        s = np.array([OTHER[int(m.jnt_type[j])][0] for j in group])
+        servos = _servos(m, group)
+        for acts in ([[]] + ([servos] if servos else [])):
+            sa = np.array([s[group.index(int(m.actuator_trnid[a, 0]))] for a in acts])
+            ratio = prediction_error(system, z, [_scaled(t, qa, da, acts, s, sa) for t in trajs], horizon) / base
+            if ratio * GAIN <= 1.0 and (best is None or (len(group), -ratio) > (len(best[0]), -best[1])):
+                best = (group, ratio, acts)
+    if best is None:
+        return ""
+    group, ratio, acts = best
+    servos = ", the servos' commands" if acts else ""
+    cols = ", ".join(f"qpos:{system.joints[j]} as {OTHER[int(m.jnt_type[j])][1]}" for j in group)
+    return (f"the recordings may be logged in other units than the model's (radians, metres): read {cols} (and "
+            f"their velocities{servos}), the model predicts them {1 / ratio:.3g}x better -- if so, convert the "
+            "columns and run again")
