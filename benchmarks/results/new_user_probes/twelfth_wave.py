@@ -17,7 +17,8 @@ the setpoints of servos, which a controller in those units sends in them) in the
   same system in any unit (its forces all scale with it), so the data cannot say which unit it
   was logged in.
 
-Prints the probes' table and, per probe, the units hint (``sysid/units.py``) where one was given.
+Prints the probes' table and, per probe, the first note on units (the hint of ``sysid/units.py``, or a
+command column far past its ``ctrlrange``, ``recordings._commands_past_range``) and how many there were.
 ``PYTHONPATH=. python benchmarks/results/new_user_probes/twelfth_wave.py [WORK] [PROBE ...]``.
 """
 import json
@@ -76,7 +77,8 @@ def main(work, only=()):
         diagnose_and_print(name, words, nominal, paths, work)
         notes = os.path.join(work, name + "_notes.json")
         if os.path.exists(notes):
-            hints[name] = next((n for n in json.load(open(notes)) if "other units" in n), "no units hint")
+            said = [n for n in json.load(open(notes)) if "other units" in n]  # (the hint; commands past their range)
+            hints[name] = f"{said[0]} ({len(said)} such notes)" if said else "no note on units"
     print()
     for name, hint in hints.items():
         print(f"- {name}: {hint}")
