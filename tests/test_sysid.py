@@ -556,16 +556,17 @@ def test_range_limits_no_recorded_position_comes_near_are_left_out_of_the_simula
 
 def test_recordings_logged_in_degrees_get_a_hint_and_radians_none(tmp_path):
     """A pendulum (native ``mj_step``, a 0.05 N m friction the model lacks) logged in radians, and
-    the same angles written in degrees: ``units.logged_units`` names the hinge and its unit for the
-    degrees, and says nothing for the radians; nor for a servo-driven slide logged in mm with its
-    setpoints (a linear system with its commands in the joint's unit: the data cannot tell)."""
+    the same angles written in degrees, and counted the other way: ``units.logged_units`` names the
+    hinge and its unit for the degrees, its sign for the flipped angle, and says nothing for the
+    radians; nor for a servo-driven slide logged in mm or flipped with its setpoints (a linear
+    system with its commands in the joint's units and sign: the data cannot tell)."""
     import mujoco
 
     from sim2real.sysid.system import System
     from sim2real.sysid.trajectory import from_recording
     from sim2real.sysid.units import logged_units
 
-    def recorded(xml, truth, name, cmd, col, act, scale):
+    def recorded(xml, truth, name, cmd, col, act, *scales):
         path = str(tmp_path / f"{name}.xml")
         open(path, "w").write(xml.format(truth=""))
         m = mujoco.MjModel.from_xml_string(xml.format(truth=truth))
@@ -579,7 +580,7 @@ def test_recordings_logged_in_degrees_get_a_hint_and_radians_none(tmp_path):
         t, q, u = map(np.array, zip(*rows))
         system = System(path, dt=0.005)
         hints = []
-        for s in (1.0, scale):
+        for s in (1.0, *scales):
             save_csv(str(tmp_path / "r.csv"), t, {col: q * s, act: u * (s if "slide" in name else 1.0)})
             tr = from_recording(load(str(tmp_path / "r.csv"), system.mj), system)
             hints.append(logged_units(system, np.array(system.spec.default, float), [tr], 20))
@@ -589,16 +590,18 @@ def test_recordings_logged_in_degrees_get_a_hint_and_radians_none(tmp_path):
       <joint name="hinge" axis="0 1 0" damping="0.01" {truth}/>
       <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/></body></worldbody>
       <actuator><motor name="m" joint="hinge"/></actuator></mujoco>"""
-    radians, degrees = recorded(pendulum, 'frictionloss="0.05"', "pendulum", lambda t: 0.8 * np.sin(2.1 * t) + 0.5 * np.sin(5.3 * t),
-                                "qpos:hinge", "ctrl:m", 180 / np.pi)
+    radians, degrees, flipped = recorded(pendulum, 'frictionloss="0.05"', "pendulum",
+                                         lambda t: 0.8 * np.sin(2.1 * t) + 0.5 * np.sin(5.3 * t), "qpos:hinge", "ctrl:m",
+                                         180 / np.pi, -1.0)
     assert radians == ""
     assert "read qpos:hinge as degrees (and their velocities)" in degrees and "convert the columns" in degrees
+    assert "read qpos:hinge with its sign flipped (and their velocities)" in flipped
     slide = """<mujoco><option timestep="0.001"/><worldbody><body name="cart">
       <joint name="slide" type="slide" axis="1 0 0" damping="2" {truth}/>
       <geom type="box" size="0.05 0.05 0.02" mass="1"/></body></worldbody>
       <actuator><position name="p" joint="slide" kp="200" kv="10"/></actuator></mujoco>"""
     assert recorded(slide, 'frictionloss="1"', "slide", lambda t: 0.1 * np.sign(np.sin(3 * t)), "qpos:slide", "ctrl:p",
-                    1000.0) == ["", ""]
+                    1000.0, -1.0) == ["", "", ""]
 
 
 def test_commands_far_past_their_ctrlrange_are_noted(tmp_path):

@@ -1330,11 +1330,15 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     # (the nominal model's inverse-dynamics residual serves the mismatch table and the plots)
     rows = invdyn.rows(trajs[: len(train)])
     res0 = invdyn.residual(system, z0, trajs[: len(train)], rows)
-    if fit["left"]["unexplained"]:  # degrees logged for radians? (only a hint: ``units.py``)
+    if fit["left"]["unexplained"]:  # degrees logged for radians, an encoder counting the other way? (``units.py``)
         hint = logged_units(system, z0, trajs[: len(train)], sh.H)
         if hint:
             fit["left"]["units"] = hint
             notes.append(hint)
+            if answer == "effects":  # (what was named may stand in for it: a flipped encoder's false payload)
+                answer = "inconclusive"
+                notes.append("answer inconclusive: the effects selected were fitted to recordings that the model "
+                             "predicts far better read in other units or signs, and may stand in for that")
     res_fit = invdyn.residual(system, z_fit, trajs[: len(train)], rows)
     mismatch = _locate(system, sh, pred0, res0, res_fit)
     fitted_params = {n: float(z_fit[spec.index(n)]) for n in system.nominal}

@@ -1,12 +1,13 @@
-"""Recordings logged in other units than the model's: degrees for a hinge's radians, millimetres
-for a slide's metres.
+"""Recordings logged in other units or sign conventions than the model's: degrees for a hinge's
+radians, millimetres for a slide's metres, a joint counted the other way.
 
 The model's joints are in rad and m; a logger that writes degrees (a servo's or a hobby encoder's
 native unit) gives angles 57x too large, and nothing else in the data says so: a pendulum logged
 in degrees was answered `none`, "the model misfits by 92.7x what the noise leaves", with no word on
-why (``benchmarks/results/new_user_probes/twelfth_wave.txt``). Where the kept model leaves motion
+why (``benchmarks/results/new_user_probes/twelfth_wave.txt``); one whose encoder counts the other
+way was named a false payload, 7620x left unexplained. Where the kept model leaves motion
 unexplained, ``logged_units`` asks the nominal model whether the recordings read in another unit
-are predicted far better: short native-MuJoCo predictions from the recorded states under the
+or sign are predicted far better: short native-MuJoCo predictions from the recorded states under the
 recorded commands, their error over each signal's own spread (so a unit cancels where the
 physics is linear in it and a servo's command scales with its joint: such data cannot tell the
 units apart, and no hint is given). Only a hint: the answer is not changed by it.
@@ -21,9 +22,9 @@ import numpy as np
 from sim2real.physics.model_apply import to_mjmodel
 from sim2real.sysid import native
 
-# (joint type: the scale that turns the other unit into the model's, the other unit's name)
-OTHER = {int(mujoco.mjtJoint.mjJNT_HINGE): (np.pi / 180.0, "degrees"),
-         int(mujoco.mjtJoint.mjJNT_SLIDE): (1e-3, "millimetres")}
+# joint type: the readings tried, (the scale that turns it into the model's units, its words)
+OTHER = {int(mujoco.mjtJoint.mjJNT_HINGE): ((np.pi / 180.0, "as degrees"), (-1.0, "with its sign flipped")),
+         int(mujoco.mjtJoint.mjJNT_SLIDE): ((1e-3, "as millimetres"), (-1.0, "with its sign flipped"))}
 GAIN = 4.0  # read in the other unit, the predictions' error at most this share of the logged one's
 STARTS = 12  # predictions per recording
 
@@ -81,9 +82,9 @@ def logged_units(system, z, trajs, horizon: int) -> str:
     ``GAIN`` times better read in another unit (``OTHER``; ``prediction_error`` over ``horizon``
     samples), or "" where none do.
 
-    Tried: every hinge and slide alone, all hinges, all slides, all of both (a logger writes every
-    angle in one unit), each with and without its servos' commands scaled; the largest group that
-    passes is named."""
+    Tried, for each reading (another unit, the sign flipped): every hinge and slide alone, all
+    hinges, all slides, all of both (a logger writes every angle in one unit), each with and
+    without its servos' commands read alike; the largest group that passes is named."""
     m = system.mj
     base = prediction_error(system, z, trajs, horizon)
     if not np.isfinite(base):
@@ -93,21 +94,22 @@ def logged_units(system, z, trajs, horizon: int) -> str:
     groups = [[j] for j in every] + [js for js in by_type.values() if len(js) > 1]
     if every and len(every) > max(len(js) for js in by_type.values()):
         groups.append(every)
-    best = None  # (joints, ratio, servos scaled)
-    for group in groups:
-        qa, da = [int(m.jnt_qposadr[j]) for j in group], [int(m.jnt_dofadr[j]) for j in group]
-        s = np.array([OTHER[int(m.jnt_type[j])][0] for j in group])
-        servos = _servos(m, group)
-        for acts in ([[]] + ([servos] if servos else [])):
-            sa = np.array([s[group.index(int(m.actuator_trnid[a, 0]))] for a in acts])
-            ratio = prediction_error(system, z, [_scaled(t, qa, da, acts, s, sa) for t in trajs], horizon) / base
-            if ratio * GAIN <= 1.0 and (best is None or (len(group), -ratio) > (len(best[0]), -best[1])):
-                best = (group, ratio, acts)
+    best = None  # (joints, reading, ratio, servos read alike)
+    for reading in range(2):
+        for group in groups:
+            qa, da = [int(m.jnt_qposadr[j]) for j in group], [int(m.jnt_dofadr[j]) for j in group]
+            s = np.array([OTHER[int(m.jnt_type[j])][reading][0] for j in group])
+            servos = _servos(m, group)
+            for acts in ([[]] + ([servos] if servos else [])):
+                sa = np.array([s[group.index(int(m.actuator_trnid[a, 0]))] for a in acts])
+                ratio = prediction_error(system, z, [_scaled(t, qa, da, acts, s, sa) for t in trajs], horizon) / base
+                if ratio * GAIN <= 1.0 and (best is None or (len(group), -ratio) > (len(best[0]), -best[2])):
+                    best = (group, reading, ratio, acts)
     if best is None:
         return ""
-    group, ratio, acts = best
+    group, reading, ratio, acts = best
     servos = ", the servos' commands" if acts else ""
-    cols = ", ".join(f"qpos:{system.joints[j]} as {OTHER[int(m.jnt_type[j])][1]}" for j in group)
-    return (f"the recordings may be logged in other units than the model's (radians, metres): read {cols} (and "
-            f"their velocities{servos}), the model predicts them {1 / ratio:.3g}x better -- if so, convert the "
-            "columns and run again")
+    cols = ", ".join(f"qpos:{system.joints[j]} {OTHER[int(m.jnt_type[j])][reading][1]}" for j in group)
+    return (f"the recordings may be logged in other units or signs than the model's (radians, metres, its joint "
+            f"axes): read {cols} (and their velocities{servos}), the model predicts them {1 / ratio:.3g}x better -- "
+            "if so, convert the columns (or the model's axis or gear) and run again")

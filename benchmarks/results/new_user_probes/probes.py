@@ -164,6 +164,8 @@ def diagnose_and_print(name, words, nominal, paths, work, train=2, **options):
         print(f"| {name} | {words} | error: {type(e).__name__}: {str(e)[:300]} | | | |", flush=True)
         return
     named = " + ".join(f"{s['effect']}@{s['target']}" if s["target"] else s["effect"] for s in d["selected"]) or d["answer"]
+    if d["answer"] == "inconclusive" and d["selected"]:  # (effects fitted, the answer held back: the notes say why)
+        named = f"inconclusive ({named})"
     values = ", ".join(f"{k} {v:.4g}" for s in d["selected"] for k, v in s["params"].items()
                        if not k.endswith(("_vel", "_r")))
     masses = ", ".join(f"{n} {r['nominal']:.4g} -> {r['fitted']:.4g}" for n, r in d["nominal_refit"].items()

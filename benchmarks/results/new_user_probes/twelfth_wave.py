@@ -1,4 +1,4 @@
-"""A twelfth wave: recordings logged in other units than the model's, as loggers write them.
+"""A twelfth wave: recordings logged in other units or signs than the model's, as loggers write them.
 
 A hobby servo's or an encoder board's log gives degrees; a linear stage's controller, millimetres.
 The model is in radians and metres (MuJoCo's units), and a new user may not think of it. Each probe
@@ -15,7 +15,9 @@ the setpoints of servos, which a controller in those units sends in them) in the
   setpoints in mm (its joint has a range, and the recordings' positions lie beyond it), and the
   same with the range left out of the model: a servo on a joint that gravity does not load is the
   same system in any unit (its forces all scale with it), so the data cannot say which unit it
-  was logged in.
+  was logged in;
+- an encoder that counts the other way (wired or mounted reversed): the pendulum's angle, and the
+  second wave's gravity-compensated 2-link arm's elbow (a 0.15 N m s/rad damping at the shoulder).
 
 Prints the probes' table and, per probe, the first note on units (the hint of ``sysid/units.py``, or a
 command column far past its ``ctrlrange``, ``recordings._commands_past_range``) and how many there were.
@@ -29,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from probes import diagnose_and_print  # noqa: E402
-from second_wave import AXIS, PENDULUM, SERVO_ARM, SLIDER, record  # noqa: E402
+from second_wave import AXIS, GRAVCOMP, PENDULUM, SERVO_ARM, SLIDER, record  # noqa: E402
 
 DEG, MM = 180 / np.pi, 1000.0
 
@@ -49,6 +51,11 @@ PROBES = {
     "axis_mm_delay_no_range": (AXIS.replace(' range="-0.5 0.5"', ""), "", "action_delay 0.012 s (position and "
                                "setpoints in mm; the model's joint without a range)", "steps", {"delay_s": 0.012},
                                {"qpos:": MM, "ctrl:": MM}),
+    "pendulum_flipped_encoder_friction": (PENDULUM, 'frictionloss="0.08"', "coulomb_friction@hinge 0.08 N m (the "
+                                          "encoder counts the other way)", "multisine", {}, {"qpos:": -1.0}),
+    "gravcomp_arm_flipped_elbow_damping": (GRAVCOMP, 'damping="0.15"', "viscous_damping@j1 0.15 N m s/rad (the "
+                                           "elbow's encoder counts the other way)", "multisine", {},
+                                           {"qpos:j2": -1.0}),
 }
 
 

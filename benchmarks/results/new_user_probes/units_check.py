@@ -1,9 +1,10 @@
 """The units hint (``sim2real/sysid/units.py``) on the independent benchmark's tuning lists: each case's
 training recordings as logged (in the model's units: a hint is a false one), then with every
 hinge's angle written in degrees and every slide's position in millimetres, the servos' setpoints
-with them (a hint is wanted, where the data can tell). Run on every case, not only where the kept
-model leaves motion unexplained (where the diagnosis asks): a stricter test of false hints.
-Prints one line per case and the counts.
+with them, and then with the first joint's sign flipped (its servo's setpoint with it) (a hint is
+wanted, where the data can tell). Run on every case, not only where the kept model leaves motion
+unexplained (where the diagnosis asks): a stricter test of false hints. Prints one line per case
+and the counts.
 
     PYTHONPATH=. python benchmarks/results/new_user_probes/units_check.py tuning [WORK]
     PYTHONPATH=. python benchmarks/results/new_user_probes/units_check.py extra [WORK]
@@ -24,11 +25,12 @@ from sim2real.sysid.trajectory import from_recording  # noqa: E402
 from sim2real.sysid.units import OTHER, _servos, logged_units  # noqa: E402
 
 
-def relogged(recs, m):
-    """``recs`` with every hinge in degrees, every slide in mm, and the servos' commands with them."""
-    joint = {m.joint(j).name: OTHER[int(m.jnt_type[j])][0] for j in range(m.njnt) if int(m.jnt_type[j]) in OTHER}
-    servo = {m.actuator(a).name: OTHER[int(m.jnt_type[m.actuator_trnid[a, 0]])][0]
-             for a in _servos(m, list(range(m.njnt)))}
+def relogged(recs, m, reading, joints):
+    """``recs`` with ``joints`` read in ``OTHER``'s ``reading`` (0: degrees or mm, 1: the sign flipped),
+    the servos' commands on them alike."""
+    joint = {m.joint(j).name: OTHER[int(m.jnt_type[j])][reading][0] for j in joints}
+    servo = {m.actuator(a).name: OTHER[int(m.jnt_type[m.actuator_trnid[a, 0]])][reading][0]
+             for a in _servos(m, list(joints))}
     out = []
     for r in recs:
         cols = dict(r.columns)
@@ -42,7 +44,7 @@ def relogged(recs, m):
 
 
 def main(split, work):
-    false = hits = total = 0
+    false = units = signs = total = 0
     for case in sysid_cases.split_cases(split):
         folder = os.path.join(work, case.label)
         di.case_files(case, folder)
@@ -52,11 +54,15 @@ def main(split, work):
         system = System(model, dt=recs[0].dt)
         z0 = np.array(system.spec.default, float)
         H = max(10, int(round(0.1 / recs[0].dt)))  # 0.1 s predictions
-        as_logged = logged_units(system, z0, [from_recording(r, system) for r in recs], H)
-        converted = logged_units(system, z0, [from_recording(r, system) for r in relogged(recs, m)], H)
-        total, false, hits = total + 1, false + bool(as_logged), hits + bool(converted)
-        print(f"{case.label} | as logged: {as_logged[80:] or '-'} | converted: {converted[80:] or 'no hint'}", flush=True)
-    print(f"{split}: {total} cases; a hint as logged (false) {false}; a hint in degrees and mm {hits}")
+        every = [j for j in range(m.njnt) if int(m.jnt_type[j]) in OTHER]
+        said = [logged_units(system, z0, [from_recording(r, system) for r in rs], H) for rs in
+                (recs, relogged(recs, m, 0, every), relogged(recs, m, 1, every[:1]))]
+        total += 1
+        false, units, signs = false + bool(said[0]), units + bool(said[1]), signs + bool(said[2])
+        print(f"{case.label} | as logged: {said[0][105:] or '-'} | degrees and mm: {said[1][105:] or 'no hint'} | "
+              f"{system.joints[every[0]]} flipped: {said[2][105:] or 'no hint'}", flush=True)
+    print(f"{split}: {total} cases; a hint as logged (false) {false}; a hint in degrees and mm {units}; "
+          f"a hint with one joint's sign flipped {signs}")
 
 
 if __name__ == "__main__":
