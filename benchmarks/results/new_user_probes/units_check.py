@@ -8,6 +8,10 @@ and the counts.
 
     PYTHONPATH=. python benchmarks/results/new_user_probes/units_check.py tuning [WORK]
     PYTHONPATH=. python benchmarks/results/new_user_probes/units_check.py extra [WORK]
+    PYTHONPATH=. python benchmarks/results/new_user_probes/units_check.py real   # the bundled real recordings
+
+``real``: each bundled real dataset's first split (``benchmarks/real_datasets.py``), as logged, with
+0.05 s, 0.1 s and 0.3 s predictions (a hint there is a false one).
 """
 import os
 import sys
@@ -65,5 +69,26 @@ def main(split, work):
           f"a hint with one joint's sign flipped {signs}")
 
 
+def real():
+    import real_datasets
+
+    from sim2real.sysid.diagnose import _model_for_loading
+
+    for name, run in real_datasets._runs().items():
+        if "swapped" in name or "offset" in name:  # (the same recordings)
+            continue
+        m = _model_for_loading(run.model)
+        recs = load_all(list(run.recordings), m)
+        system = System(run.model, dt=recs[0].dt)
+        trajs = [from_recording(r, system) for r in recs]
+        for seconds in (0.05, 0.1, 0.3):
+            H = max(5, int(round(seconds / recs[0].dt)))
+            print(f"{name} | {seconds:g} s | {logged_units(system, np.array(system.spec.default, float), trajs, H) or '-'}",
+                  flush=True)
+
+
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2] if len(sys.argv) > 2 else "/tmp/units_check")
+    if sys.argv[1] == "real":
+        real()
+    else:
+        main(sys.argv[1], sys.argv[2] if len(sys.argv) > 2 else "/tmp/units_check")
