@@ -604,6 +604,21 @@ def test_recordings_logged_in_degrees_get_a_hint_and_radians_none(tmp_path):
                     1000.0, -1.0) == ["", "", ""]
 
 
+def test_a_force_column_in_other_units_is_named():
+    """``units.force_units``: a measured force 12.5x the model's (a current logged for a torque) is
+    named with its factor; one 20% off (a gain the fit may take up), or one whose shape differs (a
+    force limit the model lacks), is not."""
+    from sim2real.sysid.units import force_units
+
+    rng = np.random.default_rng(0)
+    model = np.sin(np.linspace(0, 20, 400))[:, None] * np.array([1.0, 0.5])     # [T, 2]
+    noisy = lambda f: f + rng.normal(0, 0.01, f.shape)   # noqa: E731
+    said = force_units(["force:a", "force:b"], noisy(model * np.array([12.5, 1.0])), model)
+    assert "force:a reads 12.5" in said and "force:b" not in said
+    assert force_units(["force:a", "force:b"], noisy(model * 1.2), model) == ""
+    assert force_units(["force:a", "force:b"], noisy(np.clip(model, -0.2, 0.2)), model) == ""
+
+
 def test_commands_far_past_their_ctrlrange_are_noted(tmp_path):
     """A position servo's setpoints logged in mm (230 against a ctrlrange of +-0.3 m): MuJoCo clamps
     them, and the recording's notes say so, naming the column, the share of rows and the largest

@@ -39,7 +39,7 @@ from sim2real.sysid.select import FAR_MASS, TIMING, Model, SelectConfig, Selecto
 from sim2real.sysid.shooting import Shooting
 from sim2real.sysid.system import System
 from sim2real.sysid.trajectory import from_recording, moves, quantisation_noise, signal_scale
-from sim2real.sysid.units import logged_units
+from sim2real.sysid.units import force_units, logged_units
 
 
 @dataclasses.dataclass(frozen=True)
@@ -1332,6 +1332,9 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
     res0 = invdyn.residual(system, z0, trajs[: len(train)], rows)
     if fit["left"]["unexplained"]:  # degrees logged for radians, an encoder counting the other way? (``units.py``)
         hint = logged_units(system, z0, trajs[: len(train)], sh.H)
+        if "force" in sh.signals:  # (a current logged for a torque)
+            hint = "; ".join(x for x in (hint, force_units([f"force:{a}" for a in system.actuators],
+                                                            sh.signals["force"][check_tiles], pred_a["force"][0])) if x)
         if hint:
             fit["left"]["units"] = hint
             notes.append(hint)

@@ -27,6 +27,7 @@ OTHER = {int(mujoco.mjtJoint.mjJNT_HINGE): ((np.pi / 180.0, "as degrees"), (-1.0
          int(mujoco.mjtJoint.mjJNT_SLIDE): ((1e-3, "as millimetres"), (-1.0, "with its sign flipped"))}
 GAIN = 4.0  # read in the other unit, the predictions' error at most this share of the logged one's
 STARTS = 12  # predictions per recording
+SHAPE = 0.02  # a force column's scaled prediction leaves at most this share of its mean square
 
 
 def _scaled(tr, qa: list[int], da: list[int], acts: list[int], s, sa):
@@ -113,3 +114,33 @@ def logged_units(system, z, trajs, horizon: int) -> str:
     return (f"the recordings may be logged in other units or signs than the model's (radians, metres, its joint "
             f"axes): read {cols} (and their velocities{servos}), the model predicts them {1 / ratio:.3g}x better -- "
             "if so, convert the columns (or the model's axis or gear) and run again")
+
+
+def force_units(names: list[str], measured: np.ndarray, predicted: np.ndarray) -> str:
+    """A sentence naming the ``force:`` columns that match the model's actuator force only after a
+    factor far from 1 (another unit: a motor's current in A logged for its torque in N m, a torque
+    before the gear), or "" where none do.
+
+    ``measured``, ``predicted``: ``[..., nu]`` the recorded force and the kept model's prediction
+    of it on the same samples. A column is named where its least-squares factor is off 1 by 2x or
+    more, leaves at most ``1 / GAIN`` of the column's error without it, and at most ``SHAPE`` of
+    its mean square: the scaled prediction has the column's shape (a force limit the model lacks
+    changes the shape: a clip at a fifth of a sine's amplitude, fitted by a factor 0.25, leaves 13%)."""
+    f, p = measured.reshape(-1, measured.shape[-1]), predicted.reshape(-1, predicted.shape[-1])
+    ok = np.all(np.isfinite(f) & np.isfinite(p), axis=1)
+    f, p = f[ok], p[ok]
+    said = []
+    for a, name in enumerate(names):
+        pp = float(p[:, a] @ p[:, a])
+        if pp <= 0:
+            continue
+        k = float(f[:, a] @ p[:, a]) / pp
+        before, after = np.mean((f[:, a] - p[:, a]) ** 2), np.mean((f[:, a] - k * p[:, a]) ** 2)
+        if (abs(k) > 0 and abs(np.log(abs(k))) >= np.log(2.0) and after * GAIN <= before
+                and after <= SHAPE * np.mean(f[:, a] ** 2)):
+            said.append(f"{name} reads {k:.4g}x the model's actuator force")
+    if not said:
+        return ""
+    return ("the measured forces may be logged in other units than the model's actuator force (N, N m): "
+            + "; ".join(said) + " (a motor's current for its torque, a torque before its gear?) -- if so, scale the "
+              "columns and run again")

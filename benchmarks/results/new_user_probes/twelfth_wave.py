@@ -17,7 +17,9 @@ the setpoints of servos, which a controller in those units sends in them) in the
   same system in any unit (its forces all scale with it), so the data cannot say which unit it
   was logged in;
 - an encoder that counts the other way (wired or mounted reversed): the pendulum's angle, and the
-  second wave's gravity-compensated 2-link arm's elbow (a 0.15 N m s/rad damping at the shoulder).
+  second wave's gravity-compensated 2-link arm's elbow (a 0.15 N m s/rad damping at the shoulder);
+- the pendulum's motor force logged beside it (`force:m`): its torque in N m, and its current in A
+  (a torque constant of 0.08 N m/A: 12.5x the torque).
 
 Prints the probes' table and, per probe, the first note on units (the hint of ``sysid/units.py``, or a
 command column far past its ``ctrlrange``, ``recordings._commands_past_range``) and how many there were.
@@ -56,17 +58,31 @@ PROBES = {
     "gravcomp_arm_flipped_elbow_damping": (GRAVCOMP, 'damping="0.15"', "viscous_damping@j1 0.15 N m s/rad (the "
                                            "elbow's encoder counts the other way)", "multisine", {},
                                            {"qpos:j2": -1.0}),
+    "pendulum_torque_logged_friction": (PENDULUM, 'frictionloss="0.08"', "coulomb_friction@hinge 0.08 N m (the motor's "
+                                        "torque logged, in N m)", "multisine", {}, {"force:m": 1.0}),
+    "pendulum_current_logged_friction": (PENDULUM, 'frictionloss="0.08"', "coulomb_friction@hinge 0.08 N m (the "
+                                         "motor's current logged as its force, A at 0.08 N m/A)", "multisine", {},
+                                         {"force:m": 1 / 0.08}),
 }
 
 
 def relog(paths, scales):
-    """Rewrite each recording's columns whose name starts with a key of ``scales`` multiplied by it."""
+    """Rewrite each recording's columns whose name starts with a key of ``scales`` multiplied by it;
+    ``force:m``: add the motor's measured force, at each row the force of the command held until
+    then (the previous row's; the motor is a gear-1 torque motor, its command clipped to +-2 N m),
+    times the scale, with noise of 1% of the range."""
+    rng = np.random.default_rng(7)
     for p in paths:
         header = open(p).readline().strip().split(",")
         data = np.loadtxt(p, delimiter=",", skiprows=1)
+        if "force:m" in scales:
+            u = np.clip(data[:, header.index("ctrl:m")], -2.0, 2.0)
+            force = np.concatenate([[0.0], u[:-1]]) + rng.normal(0, 0.02, len(u))
+            data = np.column_stack([data, force * scales["force:m"]])
+            header = header + ["force:m"]
         for k, name in enumerate(header):
             for prefix, s in scales.items():
-                if name.startswith(prefix):
+                if name.startswith(prefix) and prefix != "force:m":
                     data[:, k] *= s
         np.savetxt(p, data, delimiter=",", header=",".join(header), comments="")
 
