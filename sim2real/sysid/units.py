@@ -10,7 +10,9 @@ unexplained, ``logged_units`` asks the nominal model whether the recordings read
 or sign are predicted far better: short native-MuJoCo predictions from the recorded states under the
 recorded commands, their error over each signal's own spread (so a unit cancels where the
 physics is linear in it and a servo's command scales with its joint: such data cannot tell the
-units apart, and no hint is given). Only a hint: the answer is not changed by it.
+units apart, and no hint is given). ``force_units`` does the same for measured force columns (a
+motor's current logged for its torque). Where either speaks, the diagnosis' answer, if it named
+effects, is ``inconclusive``: what was fitted may stand in for the misread data.
 """
 from __future__ import annotations
 
