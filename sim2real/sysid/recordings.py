@@ -292,7 +292,9 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
         raise RecordingError(f"{path}: no qpos:<joint> column; at least one measured position is needed")
     missing = [a for a in known["ctrl"] if f"ctrl:{a}" not in cols]
     if missing:
-        raise RecordingError(f"{path}: missing command column(s) {', '.join('ctrl:' + a for a in missing)}")
+        raise RecordingError(f"{path}: missing command column(s) {', '.join('ctrl:' + a for a in missing)} (every "
+                             "actuator of the model needs its command; one that was unpowered: leave it out of the "
+                             "model, or a motor's column of zeros)")
     # values: the first non-finite entry, by row and column
     for name, v in [("time", t)] + list(cols.items()):
         bad = ~np.isfinite(v)
