@@ -556,8 +556,8 @@ def test_range_limits_no_recorded_position_comes_near_are_left_out_of_the_simula
 
 def test_recordings_logged_in_degrees_get_a_hint_and_radians_none(tmp_path):
     """A pendulum (native ``mj_step``, a 0.05 N m friction the model lacks) logged in radians, and
-    the same angles written in degrees, and counted the other way: ``units.logged_units`` names the
-    hinge and its unit for the degrees, its sign for the flipped angle, and says nothing for the
+    the same angles written in degrees, counted the other way, and counted from upright:
+    ``units.logged_units`` names the hinge and its unit, sign or zero, and says nothing for the
     radians; nor for a servo-driven slide logged in mm or flipped with its setpoints (a linear
     system with its commands in the joint's units and sign: the data cannot tell)."""
     import mujoco
@@ -580,8 +580,8 @@ def test_recordings_logged_in_degrees_get_a_hint_and_radians_none(tmp_path):
         t, q, u = map(np.array, zip(*rows))
         system = System(path, dt=0.005)
         hints = []
-        for s in (1.0, *scales):
-            save_csv(str(tmp_path / "r.csv"), t, {col: q * s, act: u * (s if "slide" in name else 1.0)})
+        for s, c in ((1.0, 0.0), *scales):   # (logged as s x the model's position + c)
+            save_csv(str(tmp_path / "r.csv"), t, {col: q * s + c, act: u * (s if "slide" in name else 1.0)})
             tr = from_recording(load(str(tmp_path / "r.csv"), system.mj), system)
             hints.append(logged_units(system, np.array(system.spec.default, float), [tr], 20))
         return hints
@@ -590,18 +590,19 @@ def test_recordings_logged_in_degrees_get_a_hint_and_radians_none(tmp_path):
       <joint name="hinge" axis="0 1 0" damping="0.01" {truth}/>
       <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.4"/></body></worldbody>
       <actuator><motor name="m" joint="hinge"/></actuator></mujoco>"""
-    radians, degrees, flipped = recorded(pendulum, 'frictionloss="0.05"', "pendulum",
-                                         lambda t: 0.8 * np.sin(2.1 * t) + 0.5 * np.sin(5.3 * t), "qpos:hinge", "ctrl:m",
-                                         180 / np.pi, -1.0)
+    radians, degrees, flipped, upright = recorded(pendulum, 'frictionloss="0.05"', "pendulum",
+                                                  lambda t: 0.8 * np.sin(2.1 * t) + 0.5 * np.sin(5.3 * t), "qpos:hinge",
+                                                  "ctrl:m", (180 / np.pi, 0.0), (-1.0, 0.0), (1.0, -np.pi))
     assert radians == ""
     assert "read qpos:hinge as degrees (and their velocities)" in degrees and "convert the columns" in degrees
     assert "read qpos:hinge with its sign flipped (and their velocities)" in flipped
+    assert "read qpos:hinge with its zero half a turn away" in upright
     slide = """<mujoco><option timestep="0.001"/><worldbody><body name="cart">
       <joint name="slide" type="slide" axis="1 0 0" damping="2" {truth}/>
       <geom type="box" size="0.05 0.05 0.02" mass="1"/></body></worldbody>
       <actuator><position name="p" joint="slide" kp="200" kv="10"/></actuator></mujoco>"""
     assert recorded(slide, 'frictionloss="1"', "slide", lambda t: 0.1 * np.sign(np.sin(3 * t)), "qpos:slide", "ctrl:p",
-                    1000.0, -1.0) == ["", "", ""]
+                    (1000.0, 0.0), (-1.0, 0.0)) == ["", "", ""]
 
 
 def test_a_force_column_in_other_units_is_named():

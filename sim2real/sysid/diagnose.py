@@ -1341,7 +1341,7 @@ def _describe(cfg, system, sh, fitter, sel, steps, keep, chosen, dropped, refit_
             if answer == "effects":  # (what was named may stand in for it: a flipped encoder's false payload)
                 answer = "inconclusive"
                 notes.append("answer inconclusive: the effects selected were fitted to recordings that the model "
-                             "predicts far better read in other units or signs, and may stand in for that")
+                             "predicts far better read in other units or conventions, and may stand in for that")
     res_fit = invdyn.residual(system, z_fit, trajs[: len(train)], rows)
     mismatch = _locate(system, sh, pred0, res0, res_fit)
     fitted_params = {n: float(z_fit[spec.index(n)]) for n in system.nominal}

@@ -370,7 +370,7 @@ def blocks(d: dict, images: dict[str, str]) -> list[tuple]:
                        "as well as any candidate."))
     elif fit.get("left", {}).get("units"):
         B.append(("p", "**Inconclusive**: " + named(d["selected"]) + " fitted, but the recordings may be logged in "
-                       "other units or signs than the model's (below), and the fit may stand in for that."))
+                       "other units or conventions than the model's (below), and the fit may stand in for that."))
     else:
         B.append(("p", "**Inconclusive**: effects improved the training recordings but not the held-out ones (notes)."))
     if fit.get("left"):

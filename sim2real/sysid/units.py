@@ -1,11 +1,13 @@
-"""Recordings logged in other units or sign conventions than the model's: degrees for a hinge's
-radians, millimetres for a slide's metres, a joint counted the other way.
+"""Recordings logged in other units or conventions than the model's: degrees for a hinge's
+radians, millimetres for a slide's metres, a joint counted the other way, an angle's zero half a
+turn from the model's (a pendulum's angle from upright where the model's zero hangs).
 
 The model's joints are in rad and m; a logger that writes degrees (a servo's or a hobby encoder's
 native unit) gives angles 57x too large, and nothing else in the data says so: a pendulum logged
 in degrees was answered `none`, "the model misfits by 92.7x what the noise leaves", with no word on
 why (``benchmarks/results/new_user_probes/twelfth_wave.txt``); one whose encoder counts the other
-way was named a false payload, 7620x left unexplained. Where the kept model leaves motion
+way was named a false payload, 7620x left unexplained, and so was one whose angle was counted from
+upright, 426x. Where the kept model leaves motion
 unexplained, ``logged_units`` asks the nominal model whether the recordings read in another unit
 or sign are predicted far better: short native-MuJoCo predictions from the recorded states under the
 recorded commands, their error over each signal's own spread (so a unit cancels where the
@@ -24,28 +26,30 @@ import numpy as np
 from sim2real.physics.model_apply import to_mjmodel
 from sim2real.sysid import native
 
-# joint type: the readings tried, (the scale that turns it into the model's units, its words)
-OTHER = {int(mujoco.mjtJoint.mjJNT_HINGE): ((np.pi / 180.0, "as degrees"), (-1.0, "with its sign flipped")),
-         int(mujoco.mjtJoint.mjJNT_SLIDE): ((1e-3, "as millimetres"), (-1.0, "with its sign flipped"))}
+# joint type: the readings tried, (scale, offset, words): the model's position is scale x the logged
+# one + offset (a half turn: a pendulum's angle counted from upright where the model's zero hangs)
+OTHER = {int(mujoco.mjtJoint.mjJNT_HINGE): ((np.pi / 180.0, 0.0, "as degrees"), (-1.0, 0.0, "with its sign flipped"),
+                                            (1.0, np.pi, "with its zero half a turn away")),
+         int(mujoco.mjtJoint.mjJNT_SLIDE): ((1e-3, 0.0, "as millimetres"), (-1.0, 0.0, "with its sign flipped"))}
 GAIN = 4.0  # read in the other unit, the predictions' error at most this share of the logged one's
 STARTS = 12  # predictions per recording
 SHAPE = 0.02  # a force column's scaled prediction leaves at most this share of its mean square
 
 
-def _scaled(tr, qa: list[int], da: list[int], acts: list[int], s, sa):
-    """``tr`` with the positions ``qa`` and their dofs ``da`` (velocities, accelerations, a measured
-    qvel) multiplied by ``s``, the commands ``acts`` by ``sa`` (the smoothing is linear: the same
-    as smoothing the scaled data)."""
+def _scaled(tr, qa: list[int], da: list[int], s, c, acts: list[int], sa, ca):
+    """``tr`` read otherwise: the positions ``qa`` as ``s * q + c``, their dofs ``da`` (velocities,
+    accelerations, a measured qvel) multiplied by ``s``, the commands ``acts`` as ``sa * u + ca``
+    (the smoothing is linear: the same as smoothing the data read so)."""
     q, v, a, u = tr.q.copy(), tr.v.copy(), tr.a.copy(), tr.ctrl.copy()
-    q[:, qa] *= s
+    q[:, qa] = q[:, qa] * s + c
     v[:, da] *= s
     a[:, da] *= s
-    u[:, acts] *= sa
+    u[:, acts] = u[:, acts] * sa + ca
     qvel = None if tr.qvel is None else tr.qvel.copy()
     if qvel is not None:
         qvel[:, da] *= s
     sigma_q = tr.sigma_q.copy()
-    sigma_q[qa] *= s
+    sigma_q[qa] *= np.abs(s)
     return dataclasses.replace(tr, q=q, v=v, a=a, ctrl=u, qvel=qvel, sigma_q=sigma_q)
 
 
@@ -85,37 +89,41 @@ def logged_units(system, z, trajs, horizon: int) -> str:
     ``GAIN`` times better read in another unit (``OTHER``; ``prediction_error`` over ``horizon``
     samples), or "" where none do.
 
-    Tried, for each reading (another unit, the sign flipped): every hinge and slide alone, all
-    hinges, all slides, all of both (a logger writes every angle in one unit), each with and
-    without its servos' commands read alike; the largest group that passes is named."""
+    Tried, for each reading (``OTHER``: another unit, the sign flipped, the zero half a turn
+    away): every hinge and slide alone, all hinges, all slides, all of both (a logger writes every
+    angle alike), each with and without its servos' commands read alike (a velocity servo's
+    command scaled, not offset); the largest group that passes is named."""
     m = system.mj
     base = prediction_error(system, z, trajs, horizon)
     if not np.isfinite(base):
         return ""
     by_type = {t: [j for j in range(m.njnt) if int(m.jnt_type[j]) == t] for t in OTHER}
-    every = [j for js in by_type.values() for j in js]
-    groups = [[j] for j in every] + [js for js in by_type.values() if len(js) > 1]
-    if every and len(every) > max(len(js) for js in by_type.values()):
-        groups.append(every)
     best = None  # (joints, reading, ratio, servos read alike)
-    for reading in range(2):
+    for reading in range(max(len(r) for r in OTHER.values())):
+        types = {t: js for t, js in by_type.items() if reading < len(OTHER[t])}
+        every = [j for js in types.values() for j in js]
+        groups = [[j] for j in every] + [js for js in types.values() if len(js) > 1]
+        if every and len(every) > max(len(js) for js in types.values()):
+            groups.append(every)
         for group in groups:
             qa, da = [int(m.jnt_qposadr[j]) for j in group], [int(m.jnt_dofadr[j]) for j in group]
-            s = np.array([OTHER[int(m.jnt_type[j])][reading][0] for j in group])
+            s, c = (np.array([OTHER[int(m.jnt_type[j])][reading][k] for j in group]) for k in (0, 1))
             servos = _servos(m, group)
             for acts in ([[]] + ([servos] if servos else [])):
-                sa = np.array([s[group.index(int(m.actuator_trnid[a, 0]))] for a in acts])
-                ratio = prediction_error(system, z, [_scaled(t, qa, da, acts, s, sa) for t in trajs], horizon) / base
+                at = [group.index(int(m.actuator_trnid[a, 0])) for a in acts]
+                held = np.array([m.actuator_biasprm[a, 1] != 0 for a in acts], bool)  # (a position's setpoint)
+                read = [_scaled(t, qa, da, s, c, acts, s[at], np.where(held, c[at], 0.0)) for t in trajs]
+                ratio = prediction_error(system, z, read, horizon) / base
                 if ratio * GAIN <= 1.0 and (best is None or (len(group), -ratio) > (len(best[0]), -best[2])):
                     best = (group, reading, ratio, acts)
     if best is None:
         return ""
     group, reading, ratio, acts = best
     servos = ", the servos' commands" if acts else ""
-    cols = ", ".join(f"qpos:{system.joints[j]} {OTHER[int(m.jnt_type[j])][reading][1]}" for j in group)
-    return (f"the recordings may be logged in other units or signs than the model's (radians, metres, its joint "
-            f"axes): read {cols} (and their velocities{servos}), the model predicts them {1 / ratio:.3g}x better -- "
-            "if so, convert the columns (or the model's axis or gear) and run again")
+    cols = ", ".join(f"qpos:{system.joints[j]} {OTHER[int(m.jnt_type[j])][reading][2]}" for j in group)
+    return (f"the recordings may be logged in other units or conventions than the model's (radians, metres, its "
+            f"joint axes and zeros): read {cols} (and their velocities{servos}), the model predicts them "
+            f"{1 / ratio:.3g}x better -- if so, convert the columns (or the model's axis, zero or gear) and run again")
 
 
 def force_units(names: list[str], measured: np.ndarray, predicted: np.ndarray) -> str:

@@ -1,4 +1,4 @@
-"""A twelfth wave: recordings logged in other units or signs than the model's, as loggers write them.
+"""A twelfth wave: recordings logged in other units or conventions than the model's, as loggers write them.
 
 A hobby servo's or an encoder board's log gives degrees; a linear stage's controller, millimetres.
 The model is in radians and metres (MuJoCo's units), and a new user may not think of it. Each probe
@@ -18,6 +18,7 @@ the setpoints of servos, which a controller in those units sends in them) in the
   was logged in;
 - an encoder that counts the other way (wired or mounted reversed): the pendulum's angle, and the
   second wave's gravity-compensated 2-link arm's elbow (a 0.15 N m s/rad damping at the shoulder);
+- the pendulum's angle counted from upright (the model's zero hangs);
 - the pendulum's motor force logged beside it (`force:m`): its torque in N m, and its current in A
   (a torque constant of 0.08 N m/A: 12.5x the torque).
 
@@ -58,6 +59,8 @@ PROBES = {
     "gravcomp_arm_flipped_elbow_damping": (GRAVCOMP, 'damping="0.15"', "viscous_damping@j1 0.15 N m s/rad (the "
                                            "elbow's encoder counts the other way)", "multisine", {},
                                            {"qpos:j2": -1.0}),
+    "pendulum_upright_zero_friction": (PENDULUM, 'frictionloss="0.08"', "coulomb_friction@hinge 0.08 N m (the angle "
+                                       "counted from upright)", "multisine", {}, {"qpos:": (1.0, np.pi)}),
     "pendulum_torque_logged_friction": (PENDULUM, 'frictionloss="0.08"', "coulomb_friction@hinge 0.08 N m (the motor's "
                                         "torque logged, in N m)", "multisine", {}, {"force:m": 1.0}),
     "pendulum_current_logged_friction": (PENDULUM, 'frictionloss="0.08"', "coulomb_friction@hinge 0.08 N m (the "
@@ -67,7 +70,8 @@ PROBES = {
 
 
 def relog(paths, scales):
-    """Rewrite each recording's columns whose name starts with a key of ``scales`` multiplied by it;
+    """Rewrite each recording's columns whose name starts with a key of ``scales`` multiplied by it
+    (or, given ``(scale, offset)``, times the scale plus the offset);
     ``force:m``: add the motor's measured force, at each row the force of the command held until
     then (the previous row's; the motor is a gear-1 torque motor, its command clipped to +-2 N m),
     times the scale, with noise of 1% of the range."""
@@ -83,7 +87,8 @@ def relog(paths, scales):
         for k, name in enumerate(header):
             for prefix, s in scales.items():
                 if name.startswith(prefix) and prefix != "force:m":
-                    data[:, k] *= s
+                    s, c = s if isinstance(s, tuple) else (s, 0.0)   # (a scale and an offset)
+                    data[:, k] = data[:, k] * s + c
         np.savetxt(p, data, delimiter=",", header=",".join(header), comments="")
 
 
