@@ -328,8 +328,7 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
             continue
         hinge = int(model.jnt_type[j]) == hinge_or_slide[0]
         lo, hi = (float(x) for x in model.jnt_range[j])
-        span = hi - lo
-        far = (col < lo - span) | (col > hi + span)
+        far = _far_past(col, lo, hi)
         if far.any():
             row = int(np.argmax(far))
             # (or the model's range is the one in other units: MJCF angles are degrees unless the
@@ -368,6 +367,14 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
                                rows=f"{a + 1}-{b}"), model) for i, (a, b) in enumerate(kept)]
 
 
+def _far_past(col: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """``[T]`` the samples beyond the range ``[lo, hi]`` by more than its span: too far for the
+    physics (a joint held near its limits, a command clamped to its range) to explain, where a
+    value in other units lands (a hinge's degrees, a setpoint's millimetres)."""
+    span = hi - lo
+    return (col < lo - span) | (col > hi + span)
+
+
 def _commands_past_range(path: str, model: mujoco.MjModel, cols: dict) -> list[str]:
     """A note per command column that lies beyond its actuator's ``ctrlrange`` by more than the
     range's span: MuJoCo clamps every command to the range, so the model is driven by the clamp,
@@ -382,8 +389,7 @@ def _commands_past_range(path: str, model: mujoco.MjModel, cols: dict) -> list[s
         if col is None or not model.actuator_ctrllimited[a]:
             continue
         lo, hi = (float(x) for x in model.actuator_ctrlrange[a])
-        span = hi - lo
-        far = (col < lo - span) | (col > hi + span)
+        far = _far_past(col, lo, hi)
         if far.any():
             row = int(np.argmax(np.abs(col - (lo + hi) / 2)))
             notes.append(f"{base}: column 'ctrl:{model.actuator(a).name}' lies beyond the actuator's ctrlrange "

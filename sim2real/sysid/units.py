@@ -7,12 +7,11 @@ native unit) gives angles 57x too large, and nothing else in the data says so: a
 in degrees was answered `none`, "the model misfits by 92.7x what the noise leaves", with no word on
 why (``benchmarks/results/new_user_probes/twelfth_wave.txt``); one whose encoder counts the other
 way was named a false payload, 7620x left unexplained, and so was one whose angle was counted from
-upright, 426x. Where the kept model leaves motion
-unexplained, ``logged_units`` asks the nominal model whether the recordings read in another unit
-or sign are predicted far better: short native-MuJoCo predictions from the recorded states under the
-recorded commands, their error over each signal's own spread (so a unit cancels where the
-physics is linear in it and a servo's command scales with its joint: such data cannot tell the
-units apart, and no hint is given). ``force_units`` does the same for measured force columns (a
+upright, 426x. Where the kept model leaves motion unexplained, ``logged_units`` asks the nominal
+model whether the recordings read in another unit or convention are predicted far better: short
+native-MuJoCo predictions from the recorded states under the recorded commands, their error over
+each signal's own spread (so a unit cancels where the physics is linear in it and a servo's
+command scales with its joint: such data cannot tell the units apart, and no hint is given). ``force_units`` does the same for measured force columns (a
 motor's current logged for its torque). Where either speaks, the diagnosis' answer, if it named
 effects, is ``inconclusive``: what was fitted may stand in for the misread data.
 """
@@ -23,6 +22,8 @@ import dataclasses
 import mujoco
 import numpy as np
 
+from sim2real.physics.kinds.base import actuator_joint
+from sim2real.physics.kinds.gain import is_servo
 from sim2real.physics.model_apply import to_mjmodel
 from sim2real.sysid import native
 
@@ -56,8 +57,7 @@ def _scaled(tr, qa: list[int], da: list[int], s, c, acts: list[int], sa, ca):
 def _servos(m: mujoco.MjModel, joints: list[int]) -> list[int]:
     """The actuators on ``joints`` whose command is a position or a velocity (a bias that pulls the
     joint to it: ``position``, ``velocity``, an affine ``general``; ``intvelocity``)."""
-    on = [a for a in range(m.nu) if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT
-          and m.actuator_trnid[a, 0] in joints]
+    on = [a for a in range(m.nu) if actuator_joint(m, a) in joints]
     return [a for a in on if np.any(m.actuator_biasprm[a, 1:3] != 0)
             or m.actuator_dyntype[a] == mujoco.mjtDyn.mjDYN_INTEGRATOR]
 
@@ -110,8 +110,8 @@ def logged_units(system, z, trajs, horizon: int) -> str:
             s, c = (np.array([OTHER[int(m.jnt_type[j])][reading][k] for j in group]) for k in (0, 1))
             servos = _servos(m, group)
             for acts in ([[]] + ([servos] if servos else [])):
-                at = [group.index(int(m.actuator_trnid[a, 0])) for a in acts]
-                held = np.array([m.actuator_biasprm[a, 1] != 0 for a in acts], bool)  # (a position's setpoint)
+                at = [group.index(actuator_joint(m, a)) for a in acts]
+                held = np.array([is_servo(m, a) for a in acts], bool)  # (a position's setpoint: offset too)
                 read = [_scaled(t, qa, da, s, c, acts, s[at], np.where(held, c[at], 0.0)) for t in trajs]
                 ratio = prediction_error(system, z, read, horizon) / base
                 if ratio * GAIN <= 1.0 and (best is None or (len(group), -ratio) > (len(best[0]), -best[2])):
