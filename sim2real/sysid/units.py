@@ -62,13 +62,13 @@ def _servos(m: mujoco.MjModel, joints: list[int]) -> list[int]:
             or m.actuator_dyntype[a] == mujoco.mjtDyn.mjDYN_INTEGRATOR]
 
 
-def prediction_error(system, z, trajs, horizon: int) -> float:
-    """The nominal model's short predictions (``horizon`` samples, ``STARTS`` per recording, native
-    ``mj_step`` at the diagnosis' physics step) from the recorded positions and velocity estimates
-    under the recorded commands: RMS error over each position column's spread (its std over the
-    recordings, at least its noise); activations at rest where each starts (``native.activation_at``);
-    a diverged prediction counts as 1e3 (its squared error 1e6)."""
-    m = to_mjmodel(system.physics, z)
+def prediction_error(system, m: mujoco.MjModel, trajs, horizon: int) -> float:
+    """The native model ``m``'s short predictions (``horizon`` samples, ``STARTS`` per recording,
+    ``mj_step`` at the diagnosis' physics step: ``to_mjmodel`` of ``system``'s physics) from the
+    recorded positions and velocity estimates under the recorded commands: RMS error over each
+    position column's spread (its std over the recordings, at least its noise); activations at
+    rest where each starts (``native.activation_at``); a diverged prediction counts as 1e3 (its
+    squared error 1e6)."""
     d = mujoco.MjData(m)
     q_all = np.concatenate([tr.q for tr in trajs])
     spread = np.maximum(q_all.std(0), np.max([tr.sigma_q for tr in trajs], 0))
@@ -94,7 +94,8 @@ def logged_units(system, z, trajs, horizon: int) -> str:
     angle alike), each with and without its servos' commands read alike (a velocity servo's
     command scaled, not offset); the largest group that passes is named."""
     m = system.mj
-    base = prediction_error(system, z, trajs, horizon)
+    native_m = to_mjmodel(system.physics, z)  # (one model for every reading: only the data change)
+    base = prediction_error(system, native_m, trajs, horizon)
     if not np.isfinite(base):
         return ""
     by_type = {t: [j for j in range(m.njnt) if int(m.jnt_type[j]) == t] for t in OTHER}
@@ -113,7 +114,7 @@ def logged_units(system, z, trajs, horizon: int) -> str:
                 at = [group.index(actuator_joint(m, a)) for a in acts]
                 held = np.array([is_servo(m, a) for a in acts], bool)  # (a position's setpoint: offset too)
                 read = [_scaled(t, qa, da, s, c, acts, s[at], np.where(held, c[at], 0.0)) for t in trajs]
-                ratio = prediction_error(system, z, read, horizon) / base
+                ratio = prediction_error(system, native_m, read, horizon) / base
                 if ratio * GAIN <= 1.0 and (best is None or (len(group), -ratio) > (len(best[0]), -best[2])):
                     best = (group, reading, ratio, acts)
     if best is None:
