@@ -67,6 +67,34 @@ def test_parquet_recording_loads_like_the_csv_and_names_its_problems(tmp_path):
         load(str(tmp_path / "text.parquet"), _model())
 
 
+def test_text_tables_as_loggers_and_spreadsheets_write_them_load_like_the_csv(tmp_path):
+    """Semicolons with decimal commas, tabs, comment lines, np.savetxt's commented header, a pandas
+    index column and units after the names all read as the plain CSV does."""
+    t, cols = _good()
+    save_csv(str(tmp_path / "ok.csv"), t, cols)
+    q, u = cols["qpos:hinge"], cols["ctrl:motor"]
+    rows = [(float(a), float(b), float(c)) for a, b, c in zip(t, q, u)]
+    layouts = {
+        "semicolons.csv": "time;qpos:hinge;ctrl:motor\n" + "".join(f"{a!r};{b!r};{c!r}\n".replace(".", ",")
+                                                                 for a, b, c in rows),
+        "tabs.tsv": "time\tqpos:hinge\tctrl:motor\n" + "".join(f"{a!r}\t{b!r}\t{c!r}\n" for a, b, c in rows),
+        "commented.csv": "# rig 3, 2026-12-07\ntime,qpos:hinge,ctrl:motor\n" + "".join(f"{a!r},{b!r},{c!r}\n"
+                                                                                      for a, b, c in rows),
+        "savetxt.txt": "# time qpos:hinge ctrl:motor\n" + "".join(f"{a!r} {b!r} {c!r}\n" for a, b, c in rows),
+        "pandas.csv": ",time,qpos:hinge,ctrl:motor\n" + "".join(f"{i},{a!r},{b!r},{c!r}\n"
+                                                               for i, (a, b, c) in enumerate(rows)),
+        "units.csv": "time [s],qpos:hinge (rad),ctrl:motor [N m]\n" + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows),
+    }
+    ref = load(str(tmp_path / "ok.csv"), _model())
+    for name, text in layouts.items():
+        (tmp_path / name).write_text(text)
+        rec = load(str(tmp_path / name), _model())
+        assert sorted(rec.columns) == sorted(ref.columns), name
+        for c in ref.columns:
+            np.testing.assert_allclose(rec.columns[c], ref.columns[c], atol=1e-8, err_msg=name)
+        np.testing.assert_allclose(rec.time, ref.time, atol=1e-12, err_msg=name)
+
+
 JOINT_STATE = """std_msgs/Header header
 string[] name
 float64[] position

@@ -14,7 +14,8 @@ column                 meaning
 ``qfrc:<joint>``       known external generalised force on the joint (optional)
 =====================  ===========================================================
 
-CSV (header row), NPZ (arrays named like the columns), Parquet (numeric columns named like the
+CSV and other delimited text (header row; ``.tsv``, ``.txt``: :func:`_read_csv`; a unit after a name,
+``qpos:hinge [rad]``, is checked: :func:`_check_units`), NPZ (arrays named like the columns), Parquet (numeric columns named like the
 columns; pyarrow), MCAP (ROS 2 ``sensor_msgs/JointState``: :func:`_read_mcap`) and MATLAB ``.mat`` (variables named like the columns with ``:`` written as
 ``__``, e.g. ``qpos__axis``) are read. Every problem raises
 :class:`RecordingError` naming the file and the column or row.
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 
 import mujoco
 import numpy as np
@@ -102,41 +104,95 @@ class Recording:
 
 
 def _read_csv(path: str) -> dict[str, np.ndarray]:
-    """CSV with a header row; every cell must be a number (the error names row and column)."""
+    """Delimited text with a header row, as loggers and spreadsheets write it (``.csv``, ``.tsv``,
+    ``.txt``): the delimiter is the header's (comma, semicolon, tab, else runs of spaces); lines
+    starting with ``#`` are comments, the last one before the data taken as the header where no
+    header row follows (``np.savetxt(..., header=...)``); with a semicolon or tab a decimal comma
+    reads as a point (a European spreadsheet's ``0,005``); a first column without a name holding
+    0, 1, 2, ... (a pandas index, ``to_csv`` without ``index=False``) is left out. Every other
+    cell must be a number (the error names row and column)."""
     import csv
 
     # utf-8-sig: spreadsheet programs start the file with a byte-order mark
     with open(path, newline="", encoding="utf-8-sig") as f:
-        rows = csv.reader(f)
-        header = next(rows, None)
-        if not header or not any(h.strip() for h in header):
-            raise RecordingError(f"{path}: empty file (expected a header row)")
-        names = [h.strip() for h in header]
-        if len(set(names)) != len(names):
-            dup = sorted({n for n in names if names.count(n) > 1})
-            raise RecordingError(f"{path}: duplicated column(s) {dup}")
-        data = []
-        for r, row in enumerate(rows, start=1):
-            if not row or all(not c.strip() for c in row):
-                continue  # blank line (a trailing newline)
-            if len(row) != len(names):
-                raise RecordingError(f"{path}: malformed CSV: data row {r} has {len(row)} values, "
-                                     f"the header {len(names)} columns")
-            vals = []
-            for c, cell in enumerate(row):
-                cell = cell.strip()
-                if not cell:
-                    raise RecordingError(f"{path}: empty cell in column '{names[c]}' at data row {r}")
-                try:
-                    vals.append(float(cell))
-                except ValueError:
-                    raise RecordingError(f"{path}: '{cell[:20]}' in column '{names[c]}' at data row {r} "
-                                         "is not a number") from None
-            data.append(vals)
+        lines = f.read().splitlines()
+    comments = []
+    while lines and (not lines[0].strip() or lines[0].lstrip().startswith("#")):
+        if lines[0].strip():
+            comments.append(lines[0].lstrip()[1:])
+        lines.pop(0)
+    lines = [ln for ln in lines if not ln.lstrip().startswith("#")]
+    if not lines and not comments:
+        raise RecordingError(f"{path}: empty file (expected a header row)")
+
+    def delimiter(line):
+        counts = {d: line.count(d) for d in (",", ";", "\t")}
+        best = max(counts, key=counts.get)
+        return best if counts[best] else None  # None: whitespace
+
+    def split(line, delim):
+        return next(csv.reader([line], delimiter=delim)) if delim else line.split()
+
+    def numeric(cells):
+        try:
+            [float(c) for c in cells if c.strip()]
+            return any(c.strip() for c in cells)
+        except ValueError:
+            return False
+
+    delim = delimiter(lines[0]) if lines else None
+    if not lines or numeric(split(lines[0], delim)):
+        # no header row: np.savetxt writes its header as the last comment line
+        head = comments[-1] if comments else ""
+        d = delimiter(head)
+        if lines and head.strip() and len(split(head, d)) == len(split(lines[0], delim)) \
+                and not numeric(split(head, d)):
+            header = split(head, d)
+        elif lines:
+            raise RecordingError(f"{path}: the first row holds numbers ({lines[0][:40]}), not column names: the first "
+                                 "row must name the columns (time, qpos:<joint>, ctrl:<actuator>, ...)")
+        else:
+            raise RecordingError(f"{path}: no data rows (only a header)")
+    else:
+        header = split(lines.pop(0), delim)
+    if not any(h.strip() for h in header):
+        raise RecordingError(f"{path}: empty file (expected a header row)")
+    names = [h.strip() for h in header]
+    if len(set(names)) != len(names):
+        dup = sorted({n for n in names if names.count(n) > 1})
+        raise RecordingError(f"{path}: duplicated column(s) {dup}")
+    data = []
+    rows = csv.reader(lines, delimiter=delim) if delim else (ln.split() for ln in lines)
+    for r, row in enumerate(rows, start=1):
+        if not row or all(not c.strip() for c in row):
+            continue  # blank line (a trailing newline)
+        if len(row) != len(names):
+            raise RecordingError(f"{path}: malformed CSV: data row {r} has {len(row)} values, "
+                                 f"the header {len(names)} columns")
+        vals = []
+        for c, cell in enumerate(row):
+            cell = cell.strip()
+            if not cell:
+                raise RecordingError(f"{path}: empty cell in column '{names[c]}' at data row {r}")
+            try:
+                vals.append(float(cell))
+            except ValueError:
+                if delim != "," and cell.count(",") == 1:
+                    try:
+                        vals.append(float(cell.replace(",", ".")))
+                        continue
+                    except ValueError:
+                        pass
+                raise RecordingError(f"{path}: '{cell[:20]}' in column '{names[c]}' at data row {r} "
+                                     "is not a number") from None
+        data.append(vals)
     if not data:
         raise RecordingError(f"{path}: no data rows (only a header)")
     arr = np.asarray(data, np.float64)
-    return {n: arr[:, i] for i, n in enumerate(names)}
+    cols = {n: arr[:, i] for i, n in enumerate(names)}
+    if names[0] == "" and np.array_equal(cols[""], np.arange(len(arr))):
+        del cols[""]  # a pandas index
+    return cols
 
 
 def _read_npz(path: str) -> dict[str, np.ndarray]:
@@ -223,7 +279,7 @@ def _read_mcap(path: str) -> dict[str, np.ndarray]:
 
 
 # one reader per format; a new format is one function here (and its test)
-READERS = {".csv": _read_csv, ".npz": _read_npz, ".mat": _read_mat, ".parquet": _read_parquet, ".mcap": _read_mcap}
+READERS = {".csv": _read_csv, ".tsv": _read_csv, ".txt": _read_csv, ".npz": _read_npz, ".mat": _read_mat, ".parquet": _read_parquet, ".mcap": _read_mcap}
 
 
 def _read_table(path: str) -> dict[str, np.ndarray]:
@@ -237,7 +293,11 @@ def _read_table(path: str) -> dict[str, np.ndarray]:
     if os.path.isdir(path):
         raise RecordingError(f"{path}: is a folder, not a recording file")
     if ext not in READERS:
-        raise RecordingError(f"{path}: unsupported file type '{ext}' (use {', '.join(READERS)})")
+        hint = {".xlsx": "a spreadsheet: save it as CSV", ".xls": "a spreadsheet: save it as CSV",
+                ".ods": "a spreadsheet: save it as CSV", ".bag": "a ROS 1 bag: convert it to MCAP (mcap convert)",
+                ".db3": "a ROS 2 SQLite bag: convert it to MCAP (ros2 bag convert)"}.get(ext)
+        raise RecordingError(f"{path}: unsupported file type '{ext}' (use {', '.join(READERS)}"
+                             + (f"; {hint})" if hint else ")"))
     try:
         return READERS[ext](path)
     except RecordingError:
@@ -261,15 +321,17 @@ def load_pieces(path: str, model: mujoco.MjModel) -> list[Recording]:
 
 
 def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
-    cols = _read_table(path)
+    cols, units = _strip_units(path, _read_table(path))
     if "time" not in cols:
-        raise RecordingError(f"{path}: no 'time' column (columns: {', '.join(cols)})")
+        like = [c for c in cols if c.lower().startswith(("time", "stamp", "timestamp")) or c.lower() in ("t", "sec")]
+        raise RecordingError(f"{path}: no 'time' column (columns: {', '.join(cols)})"
+                             + (f"; if '{like[0]}' is the time, name it 'time' (in seconds)" if like else ""))
     t = cols.pop("time")
     n = len(t)
     for name, v in cols.items():
         if ":" not in name or name.split(":", 1)[0] not in KINDS:
             raise RecordingError(f"{path}: unknown column '{name}'; columns are time and "
-                                 f"{', '.join(k + ':<name>' for k in KINDS)}")
+                                 f"{', '.join(k + ':<name>' for k in KINDS)}" + _did_you_mean(name, model))
         if len(v) != n:
             raise RecordingError(f"{path}: column '{name}' has {len(v)} values, time has {n}")
     from sim2real.sysid.trajectory import ModelColumns
@@ -288,6 +350,7 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
         if target not in known[kind]:
             raise RecordingError(f"{path}: column '{name}' names {what} '{target}', which the model does not have "
                                  f"(model {what}s: {', '.join(str(k) for k in known[kind])})")
+    _check_units(path, model, mc, units)
     if not any(c.startswith("qpos:") for c in cols):
         raise RecordingError(f"{path}: no qpos:<joint> column; at least one measured position is needed")
     missing = [a for a in known["ctrl"] if f"ctrl:{a}" not in cols]
@@ -365,6 +428,77 @@ def _load(path: str, model: mujoco.MjModel, cut: bool) -> list[Recording]:
                if len(kept) < len(bounds) else "") + ", each simulated from its own first state")
     return [_on_grid(Recording(path, t[a:b], {k: v[a:b] for k, v in cols.items()}, notes + [note] if i == 0 else [],
                                rows=f"{a + 1}-{b}"), model) for i, (a, b) in enumerate(kept)]
+
+
+# A unit written after a column's name, "qpos:hinge [rad]", "time (s)": read, checked, and taken off.
+_UNIT = re.compile(r"^(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]$")
+_SAME = {"s": "s", "sec": "s", "rad": "rad", "m": "m", "rad/s": "rad/s", "m/s": "m/s", "n": "N", "nm": "N m",
+         "n m": "N m", "n*m": "N m", "n.m": "N m", "n·m": "N m", "1": "1", "-": "1", "": "1"}
+# ... and the units a logger may use instead, with what makes them SI
+_CONVERT = {"ms": "s: divide by 1000", "us": "s: divide by 1e6", "µs": "s: divide by 1e6", "ns": "s: divide by 1e9",
+            "deg": "rad: multiply by pi/180", "°": "rad: multiply by pi/180", "degrees": "rad: multiply by pi/180",
+            "mm": "m: divide by 1000", "cm": "m: divide by 100", "deg/s": "rad/s: multiply by pi/180",
+            "°/s": "rad/s: multiply by pi/180", "rpm": "rad/s: multiply by pi/30", "mm/s": "m/s: divide by 1000",
+            "nmm": "N m: divide by 1000", "n mm": "N m: divide by 1000", "kn": "N: multiply by 1000"}
+
+
+def _strip_units(path: str, cols: dict) -> tuple[dict, dict]:
+    """``{'qpos:hinge [rad]': x}`` -> ``({'qpos:hinge': x}, {'qpos:hinge': 'rad'})``."""
+    out, units = {}, {}
+    for name, v in cols.items():
+        m = _UNIT.match(name)
+        base = m.group(1).strip() if m else name
+        if base in out:
+            raise RecordingError(f"{path}: duplicated column '{base}' (as '{name}')")
+        out[base] = v
+        if m:
+            units[base] = m.group(2)
+    return out, units
+
+
+def _check_units(path: str, model: mujoco.MjModel, mc, units: dict) -> None:
+    """A unit written in a column's name must be the one the column is read in (SI, MuJoCo's):
+    time in s; a hinge's position in rad, its velocity in rad/s; a slide's in m and m/s; a free
+    joint's position in m, its quaternion unitless; ``force:`` and ``qfrc:`` in N or N m.
+    ``ctrl:`` columns are in the actuator's own units, whatever their name says."""
+    for col, unit in units.items():
+        kind, _, target = col.partition(":")
+        if kind == "ctrl":
+            continue
+        if kind == "time":
+            want = {"s"}
+        elif kind in ("force", "qfrc"):
+            want = {"N", "N m"}
+        else:
+            joint, _, coord = target.partition(":")
+            jt = int(model.jnt_type[model.joint(joint).id])
+            if coord:
+                want = {"1"} if coord.startswith("q") else {"m"} if kind == "qpos" else \
+                    {"m/s"} if coord.startswith("v") else {"rad/s"}
+            else:
+                lin = jt == int(mujoco.mjtJoint.mjJNT_SLIDE)
+                want = {("m" if lin else "rad") + ("" if kind == "qpos" else "/s")}
+        u = unit.strip().lower()
+        if _SAME.get(u, _SAME.get(unit.strip())) in want:
+            continue
+        fix = _CONVERT.get(u)
+        raise RecordingError(f"{path}: column '{col} [{unit}]' is in {unit}; {col} is read in "
+                             f"{' or '.join(sorted(want))}" + (f" (to {fix})" if fix else ""))
+
+
+def _did_you_mean(name: str, model: mujoco.MjModel) -> str:
+    """What an unknown column's name may have meant: ``qpos/hinge`` -> ``qpos:hinge``; a bare
+    joint or actuator name -> its columns."""
+    parts = re.split(r"[:/._\- ]", name, maxsplit=1)
+    if len(parts) == 2 and parts[0].lower() in KINDS:
+        return f" (write '{parts[0].lower()}:{parts[1]}')"
+    joints = {model.joint(j).name for j in range(model.njnt)}
+    acts = {model.actuator(a).name for a in range(model.nu)}
+    if name in joints:
+        return f" (joint '{name}': its position is 'qpos:{name}', its velocity 'qvel:{name}')"
+    if name in acts:
+        return f" (actuator '{name}': its command is 'ctrl:{name}', its measured force 'force:{name}')"
+    return ""
 
 
 def _far_past(col: np.ndarray, lo: float, hi: float) -> np.ndarray:
