@@ -95,6 +95,29 @@ def test_text_tables_as_loggers_and_spreadsheets_write_them_load_like_the_csv(tm
         np.testing.assert_allclose(rec.time, ref.time, atol=1e-12, err_msg=name)
 
 
+def test_single_sample_glitches_are_set_to_their_neighbours_mean_with_a_note(tmp_path):
+    """A position read wrong for one sample is put back, named by column and row; motion that bends
+    sharply (a bounce off a stop, a chatter at the sample rate, a wrap of the angle) is left as it is."""
+    rng = np.random.default_rng(0)
+    t = np.arange(600) * 0.005
+    clean = 0.8 * np.sin(3 * t) + rng.normal(0, 1e-3, len(t))
+    q = clean.copy()
+    q[[100, 250, 401]] += [0.3, -0.05, 0.02]
+    save_csv(str(tmp_path / "glitchy.csv"), t, {"qpos:hinge": q, "ctrl:motor": np.cos(t)})
+    rec = load(str(tmp_path / "glitchy.csv"), _model())
+    assert [n for n in rec.notes if "glitch" in n] == [
+        "glitchy: 3 single-sample glitches in 'qpos:hinge' (data rows 101, 251, 402) set to the mean of their neighbours"]
+    assert np.abs(rec.get("qpos", "hinge") - clean).max() < 0.01
+    bounce = 0.5 - np.abs(np.sin(2 * t)) * 0.5 + rng.normal(0, 1e-3, len(t))   # kinks at every reversal
+    chatter = 0.3 * np.sin(t) + 0.02 * (-1.0) ** np.arange(len(t)) * (t > 1.5)  # a servo chattering
+    wrapped = np.angle(np.exp(1j * (3.05 + 0.1 * np.sin(9 * t) + rng.normal(0, 0.02, len(t)))))  # about +-pi
+    for name, x in (("bounce", bounce), ("chatter", chatter), ("wrapped", wrapped)):
+        save_csv(str(tmp_path / f"{name}.csv"), t, {"qpos:hinge": x, "ctrl:motor": np.cos(t)})
+        rec = load(str(tmp_path / f"{name}.csv"), _model())
+        assert not [n for n in rec.notes if "glitch" in n], name
+        np.testing.assert_allclose(rec.get("qpos", "hinge"), x, atol=1e-8)
+
+
 JOINT_STATE = """std_msgs/Header header
 string[] name
 float64[] position

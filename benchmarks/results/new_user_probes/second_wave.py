@@ -127,7 +127,9 @@ HELD_WRIST = SERVO_ARM.replace('timestep="0.002" integrator="implicit"', 'timest
 #   count, seconds (recordings and their length: 3 of 8 s), qfrc (a function of (qpos, qvel) giving
 #   a joint force applied at every physics step: physics the library has no name for, written here),
 #   plant (the truth's own MJCF, with bodies and joints the model lacks; the model's joints are
-#   logged, its actuators' names driven)
+#   logged, its actuators' names driven), excite (per recording, which actuators are driven; the
+#   others held at the centre of their range), rest (driven this many seconds, then held at the
+#   range's centre as long, in turn)
 PROBES = {
     "flywheel_intvelocity_friction": (FLYWHEEL, 'frictionloss="0.05"', "coulomb_friction@spin 0.05 N m",
                                       "multisine", {}),
@@ -196,6 +198,10 @@ def record(name, text, truth, drive, extras, work):
                 cmd = (lo + hi) / 2 + levels[int(t / 0.25), :m.nu] * (hi - lo) / 2 * 0.8
             else:
                 cmd = np.zeros(0)
+            if "rest" in extras and int(t / extras["rest"]) % 2:  # driven, then resting, in turn
+                cmd = (lo + hi) / 2
+            if "excite" in extras:  # one actuator at a time: the others held at their range's centre
+                cmd = np.where(extras["excite"][r], cmd, (lo + hi) / 2)
             rows.append([t + 1.5, *rng.normal(0, 1e-3, len(logged)), *cmd])
             for _ in range(sub):
                 queue.append(cmd)

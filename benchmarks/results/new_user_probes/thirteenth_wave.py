@@ -1,0 +1,89 @@
+"""A thirteenth wave: recordings with the flaws real loggers and lab routines give them.
+
+Each probe records a plant on native MuJoCo as the second wave does (3 recordings of 8 s at 200 Hz,
+position noise 1e-3, 2 to train on, the third held out), then spoils the files as a lab's would be:
+
+- an encoder read over a noisy serial line: a few single-sample glitches in each recording (a
+  position off by 0.5 rad for one sample, then back), on the second wave's pendulum with a 0.08 N m
+  hinge friction; and the same with glitches of 0.05 rad (the size of a missed packet's worth of motion);
+- a cheap potentiometer: position noise of 1e-2 rad (ten times the benchmark's largest) on the pendulum;
+- a test routine that drives one joint at a time: the gravity-compensated 2-link arm with a
+  0.15 N m s/rad damping at the shoulder, the first recording driving the shoulder alone, the
+  second the elbow alone, the held-out one both;
+- a rig that rests between bursts: the pendulum driven for 1 s, then left for 1 s (the command 0),
+  four times a recording;
+- the clean pendulum (the control: the answer on unspoilt files).
+
+Prints the probes' table and, per probe, the notes that speak of the recordings.
+``PYTHONPATH=. python benchmarks/results/new_user_probes/thirteenth_wave.py [WORK] [PROBE ...]``.
+"""
+import json
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from probes import diagnose_and_print  # noqa: E402
+from second_wave import GRAVCOMP, PENDULUM, record  # noqa: E402
+
+FRICTION = 'frictionloss="0.08"'
+# name: (model text, the truth for {truth}, words, drive, extras, spoil: {what: setting})
+PROBES = {
+    "pendulum_clean_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (clean files)", "multisine",
+                                {}, {}),
+    "pendulum_glitches_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (4 glitches of 0.5 rad "
+                                   "a recording)", "multisine", {}, {"glitches": (4, 0.5)}),
+    "pendulum_small_glitches_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (4 glitches of "
+                                         "0.05 rad a recording)", "multisine", {}, {"glitches": (4, 0.05)}),
+    "pendulum_potentiometer_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (position noise "
+                                        "1e-2 rad)", "multisine", {}, {"noise": 1e-2}),
+    "pendulum_bursts_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (driven 1 s, resting 1 s)",
+                                 "multisine", {}, {"bursts": 1.0}),
+    "gravcomp_arm_one_joint_at_a_time_damping": (GRAVCOMP, 'damping="0.15"', "viscous_damping@j1 0.15 N m s/rad "
+                                                 "(the shoulder driven alone, then the elbow; both held out)",
+                                                 "multisine", {"excite": [[1, 0], [0, 1], [1, 1]]}, {}),
+}
+
+
+def spoil(paths, how):
+    """Rewrite the recordings: ``glitches (n, size)``: n single samples of the first position off
+    by +-size; ``noise``: more position noise of this standard deviation; ``bursts``: every other
+    ``bursts`` seconds, the commands set to 0 (the bursts were recorded that way: see ``main``)."""
+    rng = np.random.default_rng(13)
+    for p in paths:
+        header = open(p).readline().strip().split(",")
+        data = np.loadtxt(p, delimiter=",", skiprows=1)
+        q = [k for k, n in enumerate(header) if n.startswith("qpos:")]
+        if "glitches" in how:
+            n, size = how["glitches"]
+            rows = rng.choice(np.arange(20, len(data) - 20), n, replace=False)
+            data[rows, q[0]] += size * rng.choice([-1.0, 1.0], n)
+        if "noise" in how:
+            data[:, q] += rng.normal(0, how["noise"], (len(data), len(q)))
+        np.savetxt(p, data, delimiter=",", header=",".join(header), comments="")
+
+
+def main(work, only=()):
+    os.makedirs(work, exist_ok=True)
+    print("| probe | truth | named | values | held-out NRMSE before -> after | seconds |")
+    print("|---|---|---|---|---|---|")
+    said = {}
+    for name, (text, truth, words, drive, extras, how) in PROBES.items():
+        if only and name not in only:
+            continue
+        if "bursts" in how:  # the plant sees the rests: the qfrc hook cannot, so the drive is masked in time
+            extras = dict(extras, rest=how["bursts"])
+        nominal, paths = record(name, text, truth, drive, extras, work)
+        spoil(paths, how)
+        diagnose_and_print(name, words, nominal, paths, work)
+        notes = os.path.join(work, name + "_notes.json")
+        if os.path.exists(notes):
+            said[name] = [n for n in json.load(open(notes)) if "simulated at" not in n]
+    print()
+    for name, notes in said.items():
+        print(f"- {name}: " + (" / ".join(n[:240] for n in notes) if notes else "no note"))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1] if len(sys.argv) > 1 else "/tmp/new_user_probes_13", tuple(sys.argv[2:]))
