@@ -1258,6 +1258,48 @@ def test_a_payload_on_a_flying_body_sits_where_its_three_coordinates_put_it(tmp_
     assert "mass_offset@quad" in [c.label for c in _library(system)]
 
 
+_FLANGE_ARM = """<mujoco>
+  <option timestep="0.002"/>
+  <worldbody>
+    <body name="upper" pos="0 0 1">
+      <joint name="shoulder" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.03" mass="2"/>
+      <body name="flange" pos="0.4 0 0">
+        <joint name="roll" axis="1 0 0"/>
+        <geom type="cylinder" fromto="0 0 0 0.02 0 0" size="0.03" mass="0.1"/>GRIPPER
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor name="m1" joint="shoulder"/><motor name="m2" joint="roll"/></actuator>
+</mujoco>"""
+
+
+def test_a_payload_on_a_body_turning_about_its_own_centre_of_mass_is_searched_in_three_coordinates(tmp_path):
+    """An arm's last link often turns about an axis through its centre of mass (a flange, a wrist
+    roll: Menagerie's UR5e has three such), so no link runs from its joint to put a payload along;
+    before, it got no payload candidate, and a gripper on the flange was never searched for. Its
+    ``mass_offset`` has a place in the body's frame, its mass sized by the arm behind it (a tenth
+    of the moving mass up to it: 0.21 kg here, not the flange's 0.1), and the physics at a place
+    off the axis is MuJoCo's own for a mass there."""
+    from sim2real.sysid.system import System
+
+    (tmp_path / "arm.xml").write_text(_FLANGE_ARM.replace("GRIPPER", ""))
+    system = System(str(tmp_path / "arm.xml"))
+    spec = system.spec
+    assert {"payload_x:flange", "payload_y:flange", "payload_z:flange"} <= set(spec.names)
+    assert "payload_r:flange" not in spec.names and "payload_r:upper" in spec.names
+    cand = next(c for c in _library(system) if c.label == "mass_offset@flange")
+    assert cand.params[0] == "payload:flange" and cand.search[0][1] == pytest.approx(5 * 0.21)
+    z = spec.default.copy()
+    for name, v in {"payload:flange": 0.5, "payload_x:flange": 0.06, "payload_z:flange": -0.02}.items():
+        z[spec.index(name)] = v
+    fitted = system.physics.apply(jnp.asarray(z))
+    truth = mujoco.MjModel.from_xml_string(_FLANGE_ARM.replace(
+        "GRIPPER", '<geom type="sphere" pos="0.07 0 -0.02" size="0.0005" mass="0.5"/>'))   # (the centre at x 0.01)
+    assert float(fitted.body_mass[2]) == pytest.approx(truth.body_mass[2], rel=1e-6)
+    np.testing.assert_allclose(np.asarray(fitted.body_ipos[2]), truth.body_ipos[2], atol=1e-6)
+
+
 def _library(system):
     from sim2real.sysid.candidates import Scales, library
 

@@ -128,7 +128,9 @@ HELD_WRIST = SERVO_ARM.replace('timestep="0.002" integrator="implicit"', 'timest
 #   a joint force applied at every physics step: physics the library has no name for, written here),
 #   plant (the truth's own MJCF, with bodies and joints the model lacks; the model's joints are
 #   logged, its actuators' names driven), excite (per recording, which actuators are driven; the
-#   others held at the centre of their range), rest (driven this many seconds, then held at the
+#   others held at the centre of their range), around ((pose, amplitude): the drive's range, the
+#   joints starting at the pose; for position servos whose ctrlrange is the joints' whole range),
+#   noise (the positions' noise std, 1e-3), rest (driven this many seconds, then held at the
 #   range's centre as long, in turn)
 PROBES = {
     "flywheel_intvelocity_friction": (FLYWHEEL, 'frictionloss="0.05"', "coulomb_friction@spin 0.05 N m",
@@ -168,9 +170,15 @@ def record(name, text, truth, drive, extras, work):
     lag = int(round(extras.get("delay_s", 0.0) / m.opt.timestep))  # a delay line at the plant's step
     rng = np.random.default_rng(1)
     lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
+    if "around" in extras:  # the drive within +-amplitude of a pose, not over the whole ctrlrange
+        centre, amplitude = (np.asarray(v, float) for v in extras["around"])
+        lo, hi = centre - amplitude, centre + amplitude
     paths = []
     for r in range(extras.get("count", 3)):
         d = mujoco.MjData(m)
+        if "around" in extras:  # (starting there)
+            d.qpos[:len(centre)] = centre
+            d.ctrl[:] = centre
         if drive == "swing":  # tilted and pushed sideways: a conical swing
             mujoco.mju_axisAngle2Quat(d.qpos[:4], np.array([1.0, 0.3, 0.0]) / np.hypot(1, 0.3), 0.6 + 0.2 * r)
             d.qvel[:3] = [0.0, 0.0, 1.5 - r]
@@ -182,11 +190,11 @@ def record(name, text, truth, drive, extras, work):
             jn = mn.joint(j).name
             cols += [f"qpos:{jn}:{c}" for c in "qw qx qy qz".split()] if mn.jnt_type[j] == 1 else [f"qpos:{jn}"]
         cols += [f"ctrl:{m.actuator(a).name}" for a in range(m.nu)]
-        queue = [np.zeros(m.nu)] * lag
+        queue = [d.ctrl.copy()] * lag
         rows, qs = [], [d.qpos.copy()]  # qs: the state at every physics step (a jittered logger samples it)
         jit = np.random.default_rng(10 + r).integers(-extras.get("jitter", 0), extras.get("jitter", 0) + 1,
                                                      int(extras.get("seconds", 8.0) / period) + 1)
-        u_eff = np.zeros(m.nu)  # the command the actuator acts on: lagged at the plant's step (``lag_s``)
+        u_eff = d.ctrl.copy()  # the command the actuator acts on: lagged at the plant's step (``lag_s``)
         for k in range(int(extras.get("seconds", 8.0) / period)):
             t = k * period
             if drive == "multisine":
@@ -202,7 +210,7 @@ def record(name, text, truth, drive, extras, work):
                 cmd = (lo + hi) / 2
             if "excite" in extras:  # one actuator at a time: the others held at their range's centre
                 cmd = np.where(extras["excite"][r], cmd, (lo + hi) / 2)
-            rows.append([t + 1.5, *rng.normal(0, 1e-3, len(logged)), *cmd])
+            rows.append([t + 1.5, *rng.normal(0, extras.get("noise", 1e-3), len(logged)), *cmd])
             for _ in range(sub):
                 queue.append(cmd)
                 u_eff = u_eff + (queue.pop(0) - u_eff) * (1 - np.exp(-m.opt.timestep / extras.get("lag_s", 1e-12)))

@@ -10,9 +10,15 @@ position noise 1e-3, 2 to train on, the third held out), then spoils the files a
 - a test routine that drives one joint at a time: the gravity-compensated 2-link arm with a
   0.15 N m s/rad damping at the shoulder, the first recording driving the shoulder alone, the
   second the elbow alone, the held-out one both;
+- an incremental encoder zeroed anew at each power-up: each recording's angle off by its own
+  constant (0, +0.05, -0.04 rad), the pendulum with its friction;
 - a rig that rests between bursts: the pendulum driven for 1 s, then left for 1 s (the command 0),
   four times a recording;
-- the clean pendulum (the control: the answer on unspoilt files).
+- the clean pendulum (the control: the answer on unspoilt files);
+- a robot as a user brings it: MuJoCo Menagerie's UR5e, its MJCF as shipped (``ur5e/``), position
+  servos driven +-0.3 rad about its home pose (the truth stepped at 0.5 ms, a quarter of the model's
+  step), logged at 500 Hz with noise 1e-4 rad, with a
+  5 N m friction at the elbow, or with a 1 kg gripper 0.15 m out on the flange that the model leaves out.
 
 Prints the probes' table and, per probe, the notes that speak of the recordings.
 ``PYTHONPATH=. python benchmarks/results/new_user_probes/thirteenth_wave.py [WORK] [PROBE ...]``.
@@ -28,6 +34,13 @@ from probes import diagnose_and_print  # noqa: E402
 from second_wave import GRAVCOMP, PENDULUM, record  # noqa: E402
 
 FRICTION = 'frictionloss="0.08"'
+# MuJoCo Menagerie's UR5e as shipped (ur5e/README.md), its visual meshes a tetrahedron each
+UR5E_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "ur5e")
+UR5E = open(os.path.join(UR5E_DIR, "ur5e.xml")).read()
+TETRAHEDRON = "v 0 0 0\nv 0.01 0 0\nv 0 0.01 0\nv 0 0 0.01\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+MESHES = {f"assets/{m}.obj": TETRAHEDRON for m in __import__("re").findall(r'<mesh file="(\w+)\.obj"/>', UR5E)}
+HOME = [-1.5708, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
+UR5E_DRIVE = {"files": MESHES, "around": (HOME, [0.3] * 6), "period": 0.002, "plant_dt": 0.0005, "noise": 1e-4}
 # name: (model text, the truth for {truth}, words, drive, extras, spoil: {what: setting})
 PROBES = {
     "pendulum_clean_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (clean files)", "multisine",
@@ -40,6 +53,21 @@ PROBES = {
                                         "1e-2 rad)", "multisine", {}, {"noise": 1e-2}),
     "pendulum_bursts_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (driven 1 s, resting 1 s)",
                                  "multisine", {}, {"bursts": 1.0}),
+    "pendulum_rehomed_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (the encoder zeroed anew "
+                                  "for each recording: offsets 0, +0.05, -0.04 rad)", "multisine", {},
+                                  {"offsets": (0.0, 0.05, -0.04)}),
+    "ur5e_elbow_friction": (UR5E.replace('<joint name="elbow_joint" class="size3_limited"/>',
+                                         '<joint name="elbow_joint" class="size3_limited" {truth}/>'),
+                            'frictionloss="5"', "coulomb_friction@elbow_joint 5 N m (Menagerie's UR5e, setpoints "
+                            "+-0.3 rad about home, 500 Hz, noise 1e-4 rad)", "multisine", UR5E_DRIVE, {}),
+    "ur5e_gripper_payload": (UR5E.replace('<geom class="eef_collision" pos="0 0.08 0" quat="1 1 0 0" size="0.04 0.02"/>',
+                                          '<geom class="eef_collision" pos="0 0.08 0" quat="1 1 0 0" size="0.04 0.02"/>'
+                                          '{truth}'),
+                             # (a body of its own: wrist_3_link gives its <inertial>, so a geom's mass would not count)
+                             '<body name="gripper" pos="0 0.15 0"><inertial pos="0 0 0" mass="1.0" '
+                             'diaginertia="0.001 0.001 0.001"/></body>',
+                             "mass_offset@wrist_3_link 1 kg 0.15 m out (a gripper the model leaves out; the UR5e as "
+                             "above)", "multisine", UR5E_DRIVE, {}),
     "gravcomp_arm_one_joint_at_a_time_damping": (GRAVCOMP, 'damping="0.15"', "viscous_damping@j1 0.15 N m s/rad "
                                                  "(the shoulder driven alone, then the elbow; both held out)",
                                                  "multisine", {"excite": [[1, 0], [0, 1], [1, 1]]}, {}),
@@ -48,7 +76,7 @@ PROBES = {
 
 def spoil(paths, how):
     """Rewrite the recordings: ``glitches (n, size)``: n single samples of the first position off
-    by +-size; ``noise``: more position noise of this standard deviation; ``bursts``: every other
+    by +-size; ``offsets``: the first position of each recording shifted by its own constant; ``noise``: more position noise of this standard deviation; ``bursts``: every other
     ``bursts`` seconds, the commands set to 0 (the bursts were recorded that way: see ``main``)."""
     rng = np.random.default_rng(13)
     for p in paths:
@@ -59,13 +87,15 @@ def spoil(paths, how):
             n, size = how["glitches"]
             rows = rng.choice(np.arange(20, len(data) - 20), n, replace=False)
             data[rows, q[0]] += size * rng.choice([-1.0, 1.0], n)
+        if "offsets" in how:  # (one per recording, in order)
+            data[:, q[0]] += how["offsets"][paths.index(p)]
         if "noise" in how:
             data[:, q] += rng.normal(0, how["noise"], (len(data), len(q)))
         np.savetxt(p, data, delimiter=",", header=",".join(header), comments="")
 
 
 def main(work, only=()):
-    os.makedirs(work, exist_ok=True)
+    os.makedirs(os.path.join(work, "assets"), exist_ok=True)
     print("| probe | truth | named | values | held-out NRMSE before -> after | seconds |")
     print("|---|---|---|---|---|---|")
     said = {}
