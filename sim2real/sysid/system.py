@@ -145,6 +145,22 @@ def _leave_out_contacts(m: mujoco.MjModel, xml_path: str, notes: list[str], apar
     return m2, left_out
 
 
+def _pyramidal_without_contacts(m: mujoco.MjModel) -> None:
+    """``m``'s friction cone set pyramidal where no contact of more than one dimension can occur.
+    MJX's elliptic-cone solver, run whenever there are constraints (a joint's friction loss, a
+    limit), gathers such contacts with an index array that is empty -- and so of float type --
+    where there are none, and fails at the first step ("Indexer must have integer or boolean
+    type"): Menagerie's SO-ARM100 (``cone="elliptic"``, friction loss on every joint), every
+    contact left out because no recorded pose brings its links near. Without such contacts the
+    cone changes nothing; ``fitted.xml`` keeps the model's (export reads the file)."""
+    if m.opt.cone != mujoco.mjtCone.mjCONE_ELLIPTIC:
+        return
+    dims = [int(m.pair_dim[ip]) if ip >= 0 else int(max(m.geom_condim[g1], m.geom_condim[g2]))
+            for g1, g2, ip in _contact_pairs(m)]
+    if not any(d > 1 for d in dims):
+        m.opt.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
+
+
 class System:
     """Static structure for identification of one MJCF at one sample period.
 
@@ -174,6 +190,7 @@ class System:
         self.notes: list[str] = []
         check_model(m, xml_path)
         m, self.left_out_contacts = _leave_out_contacts(m, xml_path, self.notes, apart)
+        _pyramidal_without_contacts(m)
         self.unlimited = tuple(int(j) for j in unlimited)
         m.jnt_limited[list(self.unlimited)] = 0  # (``limits_clear`` says why; fitted.xml keeps them: export reads the file)
         self.columns = ModelColumns(m, xml_path)

@@ -18,7 +18,8 @@ position noise 1e-3, 2 to train on, the third held out), then spoils the files a
 - a robot as a user brings it: MuJoCo Menagerie's UR5e, its MJCF as shipped (``ur5e/``), position
   servos driven +-0.3 rad about its home pose (the truth stepped at 0.5 ms, a quarter of the model's
   step), logged at 500 Hz with noise 1e-4 rad, with a
-  5 N m friction at the elbow, or with a 1 kg gripper 0.15 m out on the flange that the model leaves out.
+  5 N m friction at the elbow, or with a 1 kg gripper 0.15 m out on the flange that the model leaves out;
+  and Menagerie's SO-ARM100 (``so_arm100/``, a LeRobot arm on bus servos) with its commands 16 ms late.
 
 Prints the probes' table and, per probe, the notes that speak of the recordings.
 ``PYTHONPATH=. python benchmarks/results/new_user_probes/thirteenth_wave.py [WORK] [PROBE ...]``.
@@ -37,10 +38,30 @@ FRICTION = 'frictionloss="0.08"'
 # MuJoCo Menagerie's UR5e as shipped (ur5e/README.md), its visual meshes a tetrahedron each
 UR5E_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "ur5e")
 UR5E = open(os.path.join(UR5E_DIR, "ur5e.xml")).read()
-TETRAHEDRON = "v 0 0 0\nv 0.01 0 0\nv 0 0.01 0\nv 0 0 0.01\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
-MESHES = {f"assets/{m}.obj": TETRAHEDRON for m in __import__("re").findall(r'<mesh file="(\w+)\.obj"/>', UR5E)}
 HOME = [-1.5708, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
-UR5E_DRIVE = {"files": MESHES, "around": (HOME, [0.3] * 6), "period": 0.002, "plant_dt": 0.0005, "noise": 1e-4}
+UR5E_DRIVE = {"around": (HOME, [0.3] * 6), "period": 0.002, "plant_dt": 0.0005, "noise": 1e-4}
+# ... and its SO-ARM100 (a LeRobot arm on hobby bus servos), as shipped (so_arm100/), its meshes
+# (visual, and collision meshes that no recorded pose brings near each other) a tetrahedron each
+SO100 = open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "so_arm100", "so_arm100.xml")).read()
+SO100_POSE = [0.0, -1.57, 1.57, 1.4, -1.57, 0.8]  # (home, the wrist and jaw kept off their range ends)
+SO100_DRIVE = {"around": (SO100_POSE, [0.25] * 6), "period": 0.002, "plant_dt": 0.0005}
+
+
+def write_meshes(work):
+    """A tetrahedron under each mesh file the two Menagerie models name (OBJ text, binary STL)."""
+    import re
+    import struct
+
+    os.makedirs(os.path.join(work, "assets"), exist_ok=True)
+    v = [(0, 0, 0), (0.01, 0, 0), (0, 0.01, 0), (0, 0, 0.01)]
+    faces = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+    obj = "".join(f"v {x} {y} {z}\n" for x, y, z in v) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+    stl = b"\0" * 80 + struct.pack("<I", len(faces)) + b"".join(
+        struct.pack("<12fH", 0, 0, 0, *v[a], *v[b], *v[c], 0) for a, b, c in faces)
+    for name in re.findall(r'file="(\w+)\.obj"', UR5E):
+        open(os.path.join(work, "assets", name + ".obj"), "w").write(obj)
+    for name in re.findall(r'file="(\w+)\.stl"', SO100):
+        open(os.path.join(work, "assets", name + ".stl"), "wb").write(stl)
 # name: (model text, the truth for {truth}, words, drive, extras, spoil: {what: setting})
 PROBES = {
     "pendulum_clean_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (clean files)", "multisine",
@@ -68,6 +89,9 @@ PROBES = {
                              'diaginertia="0.001 0.001 0.001"/></body>',
                              "mass_offset@wrist_3_link 1 kg 0.15 m out (a gripper the model leaves out; the UR5e as "
                              "above)", "multisine", UR5E_DRIVE, {}),
+    "so_arm100_bus_delay": (SO100, "", "action_delay 0.016 s (Menagerie's SO-ARM100, its servos' commands 16 ms late "
+                            "on the bus; setpoints +-0.25 rad about home, 500 Hz, noise 1e-3 rad)", "multisine",
+                            dict(SO100_DRIVE, delay_s=0.016), {}),
     "gravcomp_arm_one_joint_at_a_time_damping": (GRAVCOMP, 'damping="0.15"', "viscous_damping@j1 0.15 N m s/rad "
                                                  "(the shoulder driven alone, then the elbow; both held out)",
                                                  "multisine", {"excite": [[1, 0], [0, 1], [1, 1]]}, {}),
@@ -95,7 +119,7 @@ def spoil(paths, how):
 
 
 def main(work, only=()):
-    os.makedirs(os.path.join(work, "assets"), exist_ok=True)
+    write_meshes(work)
     print("| probe | truth | named | values | held-out NRMSE before -> after | seconds |")
     print("|---|---|---|---|---|---|")
     said = {}
