@@ -130,7 +130,8 @@ HELD_WRIST = SERVO_ARM.replace('timestep="0.002" integrator="implicit"', 'timest
 #   logged, its actuators' names driven), excite (per recording, which actuators are driven; the
 #   others held at the centre of their range), around ((pose, amplitude): the drive's range, the
 #   joints starting at the pose; for position servos whose ctrlrange is the joints' whole range),
-#   noise (the positions' noise std, 1e-3), rest (driven this many seconds, then held at the
+#   qpos0 (the joints' start where the pose is not given in joint coordinates), noise (the
+#   positions' noise std, 1e-3), rest (driven this many seconds, then held at the
 #   range's centre as long, in turn)
 PROBES = {
     "flywheel_intvelocity_friction": (FLYWHEEL, 'frictionloss="0.05"', "coulomb_friction@spin 0.05 N m",
@@ -176,8 +177,9 @@ def record(name, text, truth, drive, extras, work):
     paths = []
     for r in range(extras.get("count", 3)):
         d = mujoco.MjData(m)
-        if "around" in extras:  # (starting there)
-            d.qpos[:len(centre)] = centre
+        if "around" in extras:  # (starting there; ``qpos0`` where the joints are not the actuators' coordinates)
+            q0 = np.asarray(extras.get("qpos0", centre), float)
+            d.qpos[:len(q0)] = q0
             d.ctrl[:] = centre
         if drive == "swing":  # tilted and pushed sideways: a conical swing
             mujoco.mju_axisAngle2Quat(d.qpos[:4], np.array([1.0, 0.3, 0.0]) / np.hypot(1, 0.3), 0.6 + 0.2 * r)

@@ -47,8 +47,16 @@ SO100_POSE = [0.0, -1.57, 1.57, 1.4, -1.57, 0.8]  # (home, the wrist and jaw kep
 SO100_DRIVE = {"around": (SO100_POSE, [0.25] * 6), "period": 0.002, "plant_dt": 0.0005}
 
 
+# ... and its Franka Emika Panda (franka_panda/): 7 joints on affine `general` servos, the fingers on
+# one tendon servo (its command 0-255) and tied by an equality, the implicit integrator
+PANDA = open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "franka_panda", "panda.xml")).read()
+PANDA_HOME = [0.0, 0.0, 0.0, -1.57079, 0.0, 1.57079, -0.7853]
+PANDA_DRIVE = {"around": (PANDA_HOME + [180.0], [0.25] * 7 + [50.0]), "qpos0": PANDA_HOME + [0.028, 0.028],
+               "period": 0.002, "plant_dt": 0.0005, "noise": 1e-4}
+
+
 def write_meshes(work):
-    """A tetrahedron under each mesh file the two Menagerie models name (OBJ text, binary STL)."""
+    """A tetrahedron under each mesh file the Menagerie models name (OBJ text, binary STL)."""
     import re
     import struct
 
@@ -58,10 +66,11 @@ def write_meshes(work):
     obj = "".join(f"v {x} {y} {z}\n" for x, y, z in v) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
     stl = b"\0" * 80 + struct.pack("<I", len(faces)) + b"".join(
         struct.pack("<12fH", 0, 0, 0, *v[a], *v[b], *v[c], 0) for a, b, c in faces)
-    for name in re.findall(r'file="(\w+)\.obj"', UR5E):
-        open(os.path.join(work, "assets", name + ".obj"), "w").write(obj)
-    for name in re.findall(r'file="(\w+)\.stl"', SO100):
-        open(os.path.join(work, "assets", name + ".stl"), "wb").write(stl)
+    for text in (UR5E, SO100, PANDA):
+        for name in re.findall(r'file="(\w+)\.obj"', text):
+            open(os.path.join(work, "assets", name + ".obj"), "w").write(obj)
+        for name in re.findall(r'file="(\w+)\.stl"', text):
+            open(os.path.join(work, "assets", name + ".stl"), "wb").write(stl)
 # name: (model text, the truth for {truth}, words, drive, extras, spoil: {what: setting})
 PROBES = {
     "pendulum_clean_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (clean files)", "multisine",
@@ -92,6 +101,12 @@ PROBES = {
     "so_arm100_bus_delay": (SO100, "", "action_delay 0.016 s (Menagerie's SO-ARM100, its servos' commands 16 ms late "
                             "on the bus; setpoints +-0.25 rad about home, 500 Hz, noise 1e-3 rad)", "multisine",
                             dict(SO100_DRIVE, delay_s=0.016), {}),
+    "panda_tool_payload": (PANDA.replace('diaginertia="0.001 0.0025 0.0017"/>', 'diaginertia="0.001 0.0025 0.0017"/>{truth}'),
+                           '<body name="tool" pos="0 0 0.12"><inertial pos="0 0 0" mass="0.5" '
+                           'diaginertia="0.0002 0.0002 0.0002"/></body>',
+                           "0.5 kg held in the hand 0.12 m out along the flange's axis (Menagerie's Panda; setpoints "
+                           "+-0.25 rad about home, the gripper 180+-50 of 255, 500 Hz, noise 1e-4 rad)", "multisine",
+                           PANDA_DRIVE, {}),
     "gravcomp_arm_one_joint_at_a_time_damping": (GRAVCOMP, 'damping="0.15"', "viscous_damping@j1 0.15 N m s/rad "
                                                  "(the shoulder driven alone, then the elbow; both held out)",
                                                  "multisine", {"excite": [[1, 0], [0, 1], [1, 1]]}, {}),
