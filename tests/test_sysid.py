@@ -1267,6 +1267,7 @@ _FLANGE_ARM = """<mujoco>
       <body name="flange" pos="0.4 0 0">
         <joint name="roll" axis="1 0 0"/>
         <geom type="cylinder" fromto="0 0 0 0.02 0 0" size="0.03" mass="0.1"/>GRIPPER
+        <body name="hand" pos="0.05 0 0"><geom type="box" size="0.02 0.03 0.01" mass="0.05"/></body>
       </body>
     </body>
   </worldbody>
@@ -1280,7 +1281,8 @@ def test_a_payload_on_a_body_turning_about_its_own_centre_of_mass_is_searched_in
     before, it got no payload candidate, and a gripper on the flange was never searched for. Its
     ``mass_offset`` has a place in the body's frame, its mass sized by the arm behind it (a tenth
     of the moving mass up to it: 0.21 kg here, not the flange's 0.1), and the physics at a place
-    off the axis is MuJoCo's own for a mass there."""
+    off the axis is MuJoCo's own for a mass there. A body welded to a moving one (a hand) is placed
+    alike (Menagerie's Panda: a tool held along its flange's axis had no candidate)."""
     from sim2real.sysid.system import System
 
     (tmp_path / "arm.xml").write_text(_FLANGE_ARM.replace("GRIPPER", ""))
@@ -1288,6 +1290,7 @@ def test_a_payload_on_a_body_turning_about_its_own_centre_of_mass_is_searched_in
     spec = system.spec
     assert {"payload_x:flange", "payload_y:flange", "payload_z:flange"} <= set(spec.names)
     assert "payload_r:flange" not in spec.names and "payload_r:upper" in spec.names
+    assert "payload_x:hand" in spec.names   # (a body welded to a moving one: a hand, placed alike)
     cand = next(c for c in _library(system) if c.label == "mass_offset@flange")
     assert cand.params[0] == "payload:flange" and cand.search[0][1] == pytest.approx(5 * 0.21)
     z = spec.default.copy()

@@ -15,8 +15,9 @@ viscous_damping        joint       ``viscous`` (only where the MJCF declares no 
 joint_stiffness        joint       ``stiffness`` (added to a declared spring: then either sign)
 sensor_offset          joint       ``sensor_offset``
 mass_offset            body        ``payload`` and ``payload_r`` (a point mass along the link; on a
-                                   free or ball joint's body, or one hinged through its centre of
-                                   mass, ``payload_x/y/z``, its place in the body)
+                                   free or ball joint's body, one hinged through its centre of
+                                   mass or one welded to a moving body, ``payload_x/y/z``, its
+                                   place in the body)
 contact_friction       body        ``contact_friction`` (the sliding friction of its contacts; bodies
                                    that touch something in the recordings; only when asked for)
 rotor_inertia          joint       ``armature`` (a geared rotor's inertia; only when asked for, and in

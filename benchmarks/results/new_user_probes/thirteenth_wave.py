@@ -61,16 +61,24 @@ def write_meshes(work):
     import struct
 
     os.makedirs(os.path.join(work, "assets"), exist_ok=True)
-    v = [(0, 0, 0), (0.01, 0, 0), (0, 0.01, 0), (0, 0, 0.01)]
     faces = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
-    obj = "".join(f"v {x} {y} {z}\n" for x, y, z in v) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
-    stl = b"\0" * 80 + struct.pack("<I", len(faces)) + b"".join(
-        struct.pack("<12fH", 0, 0, 0, *v[a], *v[b], *v[c], 0) for a, b, c in faces)
+
+    def tetrahedron(size):
+        v = [(0, 0, 0), (size, 0, 0), (0, size, 0), (0, 0, size)]
+        obj = "".join(f"v {x} {y} {z}\n" for x, y, z in v) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+        stl = b"\0" * 80 + struct.pack("<I", len(faces)) + b"".join(
+            struct.pack("<12fH", 0, 0, 0, *v[a], *v[b], *v[c], 0) for a, b, c in faces)
+        return obj, stl
+
     for text in (UR5E, SO100, PANDA):
-        for name in re.findall(r'file="(\w+)\.obj"', text):
-            open(os.path.join(work, "assets", name + ".obj"), "w").write(obj)
-        for name in re.findall(r'file="(\w+)\.stl"', text):
-            open(os.path.join(work, "assets", name + ".stl"), "wb").write(stl)
+        for name in re.findall(r'file="(\w+)\.(?:obj|stl)"', text):
+            # (the Panda's hand at about its own size, 0.1 m: a payload in a body is searched within
+            # twice its geoms' reach, and a 1 cm stand-in would put the held tool out of reach)
+            obj, stl = tetrahedron(0.1 if name.startswith("hand") else 0.01)
+            if f'file="{name}.obj"' in text:
+                open(os.path.join(work, "assets", name + ".obj"), "w").write(obj)
+            if f'file="{name}.stl"' in text:
+                open(os.path.join(work, "assets", name + ".stl"), "wb").write(stl)
 # name: (model text, the truth for {truth}, words, drive, extras, spoil: {what: setting})
 PROBES = {
     "pendulum_clean_friction": (PENDULUM, FRICTION, "coulomb_friction@hinge 0.08 N m (clean files)", "multisine",

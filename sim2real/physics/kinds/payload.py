@@ -1,7 +1,8 @@
 """A payload: a point mass on a body, at a ``payload_<body>`` site, its centre of mass, a fitted
 distance along the link (``payload_r``, a hinged body), or a fitted place in the body's frame
 (``payload_x/y/z``, a body that flies or turns about a point: a camera under a drone; or one
-hinged through its centre of mass: a gripper on an arm's flange); the diagnosis' ``mass_offset``."""
+hinged through its centre of mass or welded to a moving body: a gripper on an arm's flange, a tool
+in a hand); the diagnosis' ``mass_offset``."""
 from __future__ import annotations
 
 import jax.numpy as jnp
@@ -46,16 +47,18 @@ def position_params(m: mujoco.MjModel, bodies) -> list[Param]:
     centre of mass), for hinged bodies; the payload sits at the link's far end (twice the centre
     of mass distance, the tip of a uniform link) by default. ``payload_x/y/z:<body>``: its place
     in the body's frame relative to the centre of mass, for a body on a free or ball joint (a
-    drone, a floating base, a spherical pendulum) or on a hinge through its centre of mass (a
-    wheel; an arm's last link, whose gripper sits out on the flange), within twice the body's
-    reach either way; at the centre of mass by default."""
+    drone, a floating base, a spherical pendulum), on a hinge through its centre of mass (a
+    wheel; an arm's last link, whose gripper sits out on the flange) or welded to a moving body
+    (a hand on a flange), within twice the body's reach either way; at the centre of mass by
+    default. ``bodies``: the moving ones."""
     ps = []
     for b in bodies:
         ax = link_axis(m, b)
         if ax is None:
             # (a hinged body whose centre of mass is on its axis -- a wheel, an arm's last link --
-            # is placed so too: a gripper on a flange acts on every joint before it by where it is)
-            if m.body_jntnum[b] == 1 and int(m.jnt_type[m.body_jntadr[b]]) in TURNING + (HINGE,):
+            # and a body welded to a moving one -- a hand on a flange -- are placed so too: what
+            # they carry acts on every joint before them by where it is)
+            if m.body_jntnum[b] == 0 or m.body_jntnum[b] == 1 and int(m.jnt_type[m.body_jntadr[b]]) in TURNING + (HINGE,):
                 reach = round(2 * body_reach(m, b), 6)
                 name = name_of(m, mujoco.mjtObj.mjOBJ_BODY, b)
                 ps += [Param(f"{k}:{name}", 0.0, -reach, reach, "m", f"the payload's {k[-1]} from the centre of mass "
@@ -161,10 +164,11 @@ class Payload(Kind):
         at = [f"{k}:{bn}" for k in _AXES]
         if at[0] in system.spec:
             m = system.mj
-            if int(m.jnt_type[m.body_jntadr[target]]) == HINGE:
-                # a body hinged through its centre of mass is a flange or a wheel: what it carries
-                # is sized by the arm behind it, not by itself (a UR5e's 0.19 kg flange under a
-                # 1 kg gripper): a tenth of the moving mass from the base to it at least
+            if m.body_jntnum[target] == 0 or int(m.jnt_type[m.body_jntadr[target]]) == HINGE:
+                # a body hinged through its centre of mass or welded to a moving one is a flange,
+                # a hand or a wheel: what it carries is sized by the arm behind it, not by itself
+                # (a UR5e's 0.19 kg flange under a 1 kg gripper): a tenth of the moving mass from
+                # the base to it at least
                 chain, b = 0.0, target
                 while b > 0:
                     chain, b = chain + float(m.body_mass[b]), int(m.body_parentid[b])
