@@ -1280,7 +1280,7 @@ def test_a_payload_on_a_body_turning_about_its_own_centre_of_mass_is_searched_in
     roll: Menagerie's UR5e has three such), so no link runs from its joint to put a payload along;
     before, it got no payload candidate, and a gripper on the flange was never searched for. Its
     ``mass_offset`` has a place in the body's frame, its mass sized by the arm behind it (a tenth
-    of the moving mass up to it: 0.21 kg here, not the flange's 0.1), and the physics at a place
+    of the mass of the bodies from the world to it: 0.21 kg here, not the flange's 0.1), and the physics at a place
     off the axis is MuJoCo's own for a mass there. A body welded to a moving one (a hand) is placed
     alike (Menagerie's Panda: a tool held along its flange's axis had no candidate)."""
     from sim2real.sysid.system import System

@@ -481,7 +481,7 @@ def _check_units(path: str, model: mujoco.MjModel, mc, units: dict) -> None:
                 lin = jt == int(mujoco.mjtJoint.mjJNT_SLIDE)
                 want = {("m" if lin else "rad") + ("" if kind == "qpos" else "/s")}
         u = unit.strip().lower()
-        if _SAME.get(u, _SAME.get(unit.strip())) in want:
+        if _SAME.get(u) in want:
             continue
         fix = _CONVERT.get(u)
         raise RecordingError(f"{path}: column '{col} [{unit}]' is in {unit}; {col} is read in "
@@ -541,15 +541,16 @@ def _repair_glitches(path: str, cols: dict, bounds, hinge: dict) -> list[str]:
     """Measured positions: each single-sample glitch (``_glitches``, within each piece between
     lost samples) set to its neighbours' mean, in place, and a note naming the column and data
     rows. (Not velocities: an impact -- a gear's teeth meeting across its backlash -- moves a
-    velocity for a sample and back, which a position cannot do.) One glitch in a recording moved a pendulum's fitted friction by 15%
-    and its friction's onset speed from 0 to 0.3 rad/s (``new_user_probes/thirteenth_wave.txt``)."""
+    velocity for a sample and back, which a position cannot do.) Four glitches a recording moved a
+    pendulum's fitted friction by 15% and its onset speed from 0 to 0.3 rad/s
+    (``new_user_probes/thirteenth_wave.txt``)."""
     notes = []
     base = os.path.splitext(os.path.basename(path))[0]
     for name, x in cols.items():
         if not name.startswith("qpos:") or name.count(":") > 1 and name.rsplit(":", 1)[1].startswith("q"):
             continue  # (a quaternion's sign may flip for a sample: trajectory.continuous_quaternions)
         rows = []
-        angle = name.startswith("qpos:") and hinge.get(name[5:], False)
+        angle = hinge.get(name[5:], False)
         for a, b in bounds:
             for r in _glitches(x[a:b], angle) + a:
                 x[r] = (x[r - 1] + x[r + 1]) / 2

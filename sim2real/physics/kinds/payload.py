@@ -11,9 +11,9 @@ import numpy as np
 
 from sim2real.physics import massprops
 from sim2real.physics.kinds.base import BODY, TURNING, Kind, name_of
+from sim2real.physics.params import Param
 
 HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
-from sim2real.physics.params import Param
 
 
 def link_axis(m: mujoco.MjModel, b: int) -> tuple[np.ndarray, np.ndarray, float] | None:
@@ -167,8 +167,8 @@ class Payload(Kind):
             if m.body_jntnum[target] == 0 or int(m.jnt_type[m.body_jntadr[target]]) == HINGE:
                 # a body hinged through its centre of mass or welded to a moving one is a flange,
                 # a hand or a wheel: what it carries is sized by the arm behind it, not by itself
-                # (a UR5e's 0.19 kg flange under a 1 kg gripper): a tenth of the moving mass from
-                # the base to it at least
+                # (a UR5e's 0.19 kg flange under a 1 kg gripper): a tenth of the mass of the bodies
+                # from the world to it (the fixed base's included) at least
                 chain, b = 0.0, target
                 while b > 0:
                     chain, b = chain + float(m.body_mass[b]), int(m.body_parentid[b])
